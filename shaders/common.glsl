@@ -1,0 +1,21 @@
+// Helpers shared by every stage. Prepended after #version and the variant's #defines.
+
+// glAlphaFunc emulation for Quake 3's alphaFunc (scene/mod.rs AlphaFunc::code):
+// 0 = no test, 1 = GT0, 2 = LT128, 3 = GE128. Returns whether the fragment is kept.
+bool q3_alpha_passes(int func, float alpha) {
+    if (func == 1) return alpha > 0.0;
+    if (func == 2) return alpha < 0.5;
+    if (func == 3) return alpha >= 0.5;
+    return true;
+}
+
+// The receiver rule of scene/light.rs Light::reaches: within the radius, in the spot cone and on
+// the lit side of the surface. `cos_cutoff` is -1 for omni lights.
+bool light_reaches(vec3 p, vec3 n, vec3 light_pos, vec3 spot_dir, float cos_cutoff, float radius) {
+    vec3 to_light = light_pos - p;
+    float dist = length(to_light);
+    if (!(dist > 0.0 && dist < radius)) return false;
+    if (dot(n, to_light) <= 0.0) return false;
+    if (cos_cutoff > -1.0 && dot(-to_light / dist, spot_dir) <= cos_cutoff) return false;
+    return true;
+}

@@ -1,0 +1,35 @@
+// One light's additive pass (glBlendFunc(GL_ONE, GL_ONE)): diffuse with spot cone and distance
+// falloff. Fragments the light cannot reach are discarded, so they add nothing.
+in vec3 v_world;
+in vec3 v_normal;
+in vec2 v_uv;
+in vec2 v_lightmap_uv;
+
+uniform sampler2D u_texture;
+uniform int u_alpha_func;
+uniform vec3 u_light_pos;
+uniform vec3 u_light_color;
+uniform vec3 u_spot_dir;
+uniform float u_cos_cutoff;   // -1 for omni lights
+uniform float u_cos_inner;    // where the cone edge starts to soften
+uniform float u_radius;
+
+out vec4 o_color;
+
+void main() {
+    vec4 albedo = texture(u_texture, v_uv);
+    if (!q3_alpha_passes(u_alpha_func, albedo.a)) discard;
+    // Two-sided surfaces are lit on the side the camera sees.
+    vec3 n = normalize(gl_FrontFacing ? v_normal : -v_normal);
+    if (!light_reaches(v_world, n, u_light_pos, u_spot_dir, u_cos_cutoff, u_radius)) discard;
+    vec3 to_light = u_light_pos - v_world;
+    float dist = length(to_light);
+    vec3 l = to_light / dist;
+    float x = clamp(dist / u_radius, 0.0, 1.0);
+    float falloff = (1.0 - x * x) * (1.0 - x * x);
+    float cone = u_cos_cutoff > -1.0
+        ? smoothstep(u_cos_cutoff, u_cos_inner, dot(-l, u_spot_dir))
+        : 1.0;
+    float diffuse = max(dot(n, l), 0.0) * falloff * cone;
+    o_color = vec4(albedo.rgb * u_light_color * diffuse, 1.0);
+}

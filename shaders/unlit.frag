@@ -1,0 +1,25 @@
+// The paper's "unlit world": surface texture times lightmap in one pass (two texture units,
+// ARB_multitexture in the paper). Surfaces without a lightmap (models, built-in scene) use a
+// constant level instead (paper 2.5).
+in vec3 v_world;
+in vec3 v_normal;
+in vec2 v_uv;
+in vec2 v_lightmap_uv;
+
+uniform sampler2D u_texture;
+uniform sampler2D u_lightmap;
+uniform int u_alpha_func;
+uniform int u_has_lightmap;
+uniform float u_lightmap_scale;
+uniform vec3 u_ambient;
+
+out vec4 o_color;
+
+void main() {
+    vec4 albedo = texture(u_texture, v_uv);
+    if (!q3_alpha_passes(u_alpha_func, albedo.a)) discard;
+    vec3 light = u_has_lightmap != 0
+        ? texture(u_lightmap, v_lightmap_uv).rgb * u_lightmap_scale
+        : u_ambient;
+    o_color = vec4(albedo.rgb * light, 1.0);
+}

@@ -1,0 +1,27 @@
+// Every camera pass draws the world with this vertex stage, so depth is bit-identical across the
+// unlit and lit passes (`invariant`): the lit pass's LEQUAL test then passes exactly where the
+// unlit pass wrote, which is what the paper's passes rely on.
+layout(location = 0) in vec3 a_position;
+layout(location = 1) in vec3 a_normal;
+layout(location = 2) in vec2 a_uv;
+layout(location = 3) in vec2 a_lightmap_uv;
+
+uniform mat4 u_model;        // owner space -> world
+uniform mat3 u_normal_model; // inverse transpose of u_model's upper 3x3
+uniform mat4 u_view_proj;    // world -> camera clip
+
+out vec3 v_world;
+out vec3 v_normal;
+out vec2 v_uv;
+out vec2 v_lightmap_uv;
+
+invariant gl_Position;
+
+void main() {
+    vec4 world = u_model * vec4(a_position, 1.0);
+    v_world = world.xyz;
+    v_normal = u_normal_model * a_normal;
+    v_uv = a_uv;
+    v_lightmap_uv = a_lightmap_uv;
+    gl_Position = u_view_proj * world;
+}

@@ -1,0 +1,87 @@
+//! `shadowlab info`: the context path taken, the capability probe and the fallbacks chosen.
+
+use super::{CommonArgs, load_scene, start_gl};
+use anyhow::Result;
+use serde_json::json;
+
+#[derive(clap::Args)]
+pub struct Args {
+    /// Print JSON (keys: backend, renderer, version, fallbacks, ...).
+    #[arg(long)]
+    json: bool,
+}
+
+pub fn run(common: &CommonArgs, args: &Args) -> Result<()> {
+    let options = common.options_for(&load_scene(None)?)?;
+    let (ctx, renderer) = start_gl(&options)?;
+    let caps = &renderer.caps;
+    let skipped: Vec<String> = ctx
+        .skipped
+        .iter()
+        .map(|(b, why)| format!("{b}: {why}"))
+        .collect();
+    if args.json {
+        let v = json!({
+            "backend": ctx.backend.as_str(),
+            "device": ctx.device,
+            "renderer": caps.renderer,
+            "vendor": caps.vendor,
+            "version": caps.version,
+            "glsl_version": caps.glsl_version,
+            "gl_version": [caps.major, caps.minor],
+            "profile": caps.profile,
+            "software": caps.is_software(),
+            "depth_bits": caps.depth_bits,
+            "stencil_bits": caps.stencil_bits,
+            "max_texture_size": caps.max_texture_size,
+            "max_cube_map_size": caps.max_cube_map_size,
+            "max_renderbuffer_size": caps.max_renderbuffer_size,
+            "max_clip_distances": caps.max_clip_distances,
+            "extension_count": caps.extension_count,
+            "features": caps.features,
+            "fallbacks": caps.fallbacks(),
+            "skipped_backends": skipped,
+        });
+        println!("{}", serde_json::to_string_pretty(&v)?);
+        return Ok(());
+    }
+    println!("backend:        {} ({})", ctx.backend, ctx.device);
+    println!("renderer:       {}", caps.renderer);
+    println!("vendor:         {}", caps.vendor);
+    println!(
+        "version:        {} ({} profile)",
+        caps.version, caps.profile
+    );
+    println!("GLSL:           {}", caps.glsl_version);
+    println!(
+        "depth/stencil:  {}/{} bits (our framebuffer)",
+        caps.depth_bits, caps.stencil_bits
+    );
+    println!(
+        "max sizes:      texture {}, cube map {}, renderbuffer {}",
+        caps.max_texture_size, caps.max_cube_map_size, caps.max_renderbuffer_size
+    );
+    println!("clip distances: {}", caps.max_clip_distances);
+    println!("extensions:     {}", caps.extension_count);
+    println!("features:");
+    for f in &caps.features {
+        println!(
+            "  {:24} {:3}  {}",
+            f.key,
+            if f.supported { "yes" } else { "no" },
+            f.detail
+        );
+    }
+    let fallbacks = caps.fallbacks();
+    println!(
+        "fallbacks:{}",
+        if fallbacks.is_empty() { " none" } else { "" }
+    );
+    for f in fallbacks {
+        println!("  {f}");
+    }
+    for s in skipped {
+        println!("skipped path:   {s}");
+    }
+    Ok(())
+}

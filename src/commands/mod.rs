@@ -1,0 +1,81 @@
+//! Subcommands and what they share: option assembly, scene loading, context creation.
+
+pub mod info;
+pub mod options;
+pub mod render;
+
+use anyhow::{Context, Result, bail};
+use shadowlab::gl::{GlContext, Renderer, create_context};
+use shadowlab::options::{BackendChoice, OptionValue, Options};
+use shadowlab::scene::{Scene, builtin};
+
+/// Arguments every command accepts.
+#[derive(clap::Args, Clone, Default)]
+pub struct CommonArgs {
+    /// GL context path: auto (egl, then osmesa), egl, osmesa or window.
+    #[arg(long, global = true, value_name = "auto|egl|osmesa|window")]
+    pub backend: Option<String>,
+    /// Set an option (repeatable); `shadowlab options` lists the keys.
+    #[arg(long = "set", global = true, value_name = "KEY=VALUE")]
+    pub sets: Vec<String>,
+    /// Frame size, e.g. 640x480 (the paper's resolution, the default).
+    #[arg(long, global = true, value_name = "WxH")]
+    pub size: Option<String>,
+}
+
+/// Parses `WxH`.
+pub fn parse_size(s: &str) -> Result<(u32, u32)> {
+    let (w, h) = s
+        .split_once(['x', 'X'])
+        .with_context(|| format!("size `{s}` is not of the form WIDTHxHEIGHT"))?;
+    let w: u32 = w
+        .trim()
+        .parse()
+        .with_context(|| format!("bad width in `{s}`"))?;
+    let h: u32 = h
+        .trim()
+        .parse()
+        .with_context(|| format!("bad height in `{s}`"))?;
+    Ok((w, h))
+}
+
+impl CommonArgs {
+    /// Defaults, then the scene's `[options]`, then the command line (which wins).
+    pub fn options_for(&self, scene: &Scene) -> Result<Options> {
+        let mut o = Options::default();
+        o.apply_toml(&scene.options)
+            .context("in the scene's [options]")?;
+        for s in &self.sets {
+            o.set_assignment(s).context("in --set")?;
+        }
+        if let Some(b) = &self.backend {
+            o.backend =
+                BackendChoice::parse_value(b).map_err(|e| anyhow::anyhow!("--backend {b}: {e}"))?;
+        }
+        if let Some(size) = &self.size {
+            let (w, h) = parse_size(size)?;
+            o.set("width", &w.to_string()).context("in --size")?;
+            o.set("height", &h.to_string()).context("in --size")?;
+        }
+        o.validate()?;
+        Ok(o)
+    }
+}
+
+/// The scene a command works on: the built-in one unless a file is given.
+pub fn load_scene(path: Option<&std::path::Path>) -> Result<Scene> {
+    match path {
+        None => Ok(builtin::default_scene()),
+        Some(p) => bail!(
+            "cannot load {}: scene files are not supported yet",
+            p.display()
+        ),
+    }
+}
+
+/// A context on the chosen path and a renderer on it.
+pub fn start_gl(options: &Options) -> Result<(GlContext, Renderer)> {
+    let ctx = create_context(options.backend, options.width, options.height)?;
+    let renderer = Renderer::new(ctx.gl.clone(), options.width, options.height)?;
+    Ok((ctx, renderer))
+}

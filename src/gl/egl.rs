@@ -1,0 +1,101 @@
+//! Headless GL through EGL's device platform: no display, no window, no environment variables.
+//!
+//! A hardware device is preferred; the software device (`EGL_MESA_device_software`, llvmpipe) is
+//! the fallback. The context is surfaceless and renders only into our own framebuffer objects.
+
+use glutin::api::egl::{context::PossiblyCurrentContext, device::Device, display::Display};
+use glutin::config::{Api, ConfigSurfaceTypes, ConfigTemplateBuilder};
+use glutin::context::{ContextApi, ContextAttributesBuilder, GlProfile, Version};
+use glutin::display::GlDisplay;
+use std::ffi::CStr;
+
+const SOFTWARE_DEVICE_EXTENSION: &str = "EGL_MESA_device_software";
+
+/// Keeps the EGL display and context alive while GL is in use.
+pub struct EglHolder {
+    _context: PossiblyCurrentContext,
+    _display: Display,
+}
+
+/// A current surfaceless GL 3.3 core context on the best EGL device.
+pub struct EglContext {
+    pub holder: EglHolder,
+    pub gl: glow::Context,
+    /// Which device was used, e.g. "software (EGL_MESA_device_software)".
+    pub device: String,
+}
+
+fn describe(device: &Device) -> String {
+    let kind = if device.extensions().contains(SOFTWARE_DEVICE_EXTENSION) {
+        "software"
+    } else {
+        "hardware"
+    };
+    let node = device
+        .drm_render_device_node_path()
+        .or(device.drm_device_node_path())
+        .map(|p| p.display().to_string());
+    match (device.name(), node) {
+        (Some(n), _) => format!("{kind} device {n}"),
+        (None, Some(p)) => format!("{kind} device {p}"),
+        (None, None) => format!("{kind} device"),
+    }
+}
+
+fn create_on(device: &Device) -> Result<EglContext, String> {
+    // SAFETY: the device comes from query_devices; no native display handle is passed.
+    let display = unsafe { Display::with_device(device, None) }.map_err(|e| e.to_string())?;
+    let template = ConfigTemplateBuilder::new()
+        .with_api(Api::OPENGL)
+        .with_surface_type(ConfigSurfaceTypes::empty())
+        .build();
+    // SAFETY: the template is plain data.
+    let config = unsafe { display.find_configs(template) }
+        .map_err(|e| format!("no EGL config: {e}"))?
+        .next()
+        .ok_or("no EGL config for desktop OpenGL")?;
+    let attributes = ContextAttributesBuilder::new()
+        .with_context_api(ContextApi::OpenGl(Some(Version::new(3, 3))))
+        .with_profile(GlProfile::Core)
+        .build(None);
+    // SAFETY: no raw window handle is involved.
+    let context = unsafe { display.create_context(&config, &attributes) }
+        .map_err(|e| format!("cannot create a GL 3.3 core context: {e}"))?;
+    let context = context
+        .make_current_surfaceless()
+        .map_err(|e| format!("cannot make the context current without a surface: {e}"))?;
+    // SAFETY: the context is current on this thread; the loader returns its entry points.
+    let gl = unsafe {
+        glow::Context::from_loader_function_cstr(|name: &CStr| display.get_proc_address(name))
+    };
+    Ok(EglContext {
+        holder: EglHolder {
+            _context: context,
+            _display: display,
+        },
+        gl,
+        device: describe(device),
+    })
+}
+
+/// Creates the context, trying hardware devices first, then software ones. Errors list every
+/// device tried and why it failed.
+pub fn create() -> Result<EglContext, String> {
+    let devices: Vec<Device> = Device::query_devices()
+        .map_err(|e| format!("EGL devices cannot be listed ({e}); is libEGL installed?"))?
+        .collect();
+    if devices.is_empty() {
+        return Err("EGL lists no devices".to_string());
+    }
+    let (software, hardware): (Vec<_>, Vec<_>) = devices
+        .into_iter()
+        .partition(|d| d.extensions().contains(SOFTWARE_DEVICE_EXTENSION));
+    let mut failures = Vec::new();
+    for device in hardware.iter().chain(software.iter()) {
+        match create_on(device) {
+            Ok(c) => return Ok(c),
+            Err(e) => failures.push(format!("{}: {e}", describe(device))),
+        }
+    }
+    Err(failures.join("; "))
+}

@@ -1,0 +1,16 @@
+//! Everything that talks to OpenGL. It executes plans; it decides nothing about what to draw.
+
+pub mod caps;
+pub mod context;
+pub mod egl;
+pub mod osmesa;
+pub mod passes;
+pub mod program;
+pub mod renderer;
+pub mod target;
+pub mod timing;
+pub mod upload;
+pub mod window;
+
+pub use context::{Backend, ContextError, GlContext, create_context};
+pub use renderer::{RenderError, Renderer};

@@ -1,0 +1,52 @@
+//! The unlit world (paper 2.4): texture × lightmap, writing the depth the later passes test against.
+
+use super::{PassContext, draw_items};
+use crate::gl::program::Program;
+use crate::scene::SurfaceOwner;
+use glam::Vec3;
+use glow::HasContext;
+
+pub fn draw(ctx: &PassContext, program: &Program) {
+    let gl = ctx.gl;
+    // SAFETY: fixed-function state on the bound framebuffer.
+    unsafe {
+        gl.color_mask(true, true, true, true);
+        gl.depth_mask(true);
+        gl.stencil_mask(0xff);
+        gl.clear_color(0.0, 0.0, 0.0, 1.0);
+        gl.clear_depth_f64(1.0);
+        gl.clear_stencil(0);
+        gl.clear(glow::COLOR_BUFFER_BIT | glow::DEPTH_BUFFER_BIT | glow::STENCIL_BUFFER_BIT);
+        gl.enable(glow::DEPTH_TEST);
+        gl.depth_func(glow::LESS);
+        gl.disable(glow::BLEND);
+        gl.disable(glow::STENCIL_TEST);
+        gl.disable(glow::POLYGON_OFFSET_FILL);
+    }
+    program.bind(gl);
+    program.set_mat4(gl, "u_view_proj", &ctx.plan.camera.view_proj);
+    program.set_i32(gl, "u_texture", 0);
+    program.set_i32(gl, "u_lightmap", 1);
+    program.set_f32(gl, "u_lightmap_scale", 1.0);
+    let items = ctx.gpu.draw_list(ctx.scene, |s| ctx.plan.visible[s]);
+    let lighting = &ctx.options.lighting;
+    draw_items(ctx, program, &items, |item| {
+        let level = match item.owner {
+            SurfaceOwner::World => lighting.ambient,
+            SurfaceOwner::Model(_) => lighting.model_ambient,
+        };
+        program.set_vec3(gl, "u_ambient", Vec3::splat(level));
+        let lightmap = item
+            .lightmap
+            .and_then(|l| ctx.gpu.lightmaps.get(l).copied());
+        program.set_i32(gl, "u_has_lightmap", lightmap.is_some() as i32);
+        if let Some(lm) = lightmap {
+            // SAFETY: binding a valid texture to unit 1.
+            unsafe {
+                gl.active_texture(glow::TEXTURE1);
+                gl.bind_texture(glow::TEXTURE_2D, Some(lm));
+                gl.active_texture(glow::TEXTURE0);
+            }
+        }
+    });
+}

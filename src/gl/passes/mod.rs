@@ -1,0 +1,87 @@
+//! The passes a plan executes. Each pass sets every piece of GL state it relies on and leaves
+//! nothing for the next pass to assume.
+
+pub mod base;
+pub mod lit;
+
+use super::program::Program;
+use super::upload::{DrawItem, GpuScene};
+use crate::options::Options;
+use crate::plan::{Plan, normal_matrix};
+use crate::scene::{Cull, Scene};
+use glow::HasContext;
+
+/// What every pass reads.
+pub struct PassContext<'a> {
+    pub gl: &'a glow::Context,
+    pub scene: &'a Scene,
+    pub gpu: &'a GpuScene,
+    pub plan: &'a Plan,
+    pub options: &'a Options,
+}
+
+/// Face culling for a material's `cull`.
+pub fn apply_cull(gl: &glow::Context, cull: Cull) {
+    // SAFETY: fixed-function state only.
+    unsafe {
+        match cull {
+            Cull::None => gl.disable(glow::CULL_FACE),
+            Cull::Back => {
+                gl.enable(glow::CULL_FACE);
+                gl.cull_face(glow::BACK);
+            }
+            Cull::Front => {
+                gl.enable(glow::CULL_FACE);
+                gl.cull_face(glow::FRONT);
+            }
+        }
+    }
+}
+
+/// Draws `items` with `program` bound: per item the owner's transform, the material's texture on
+/// unit 0, its alpha function and culling. `extra` sets anything else per item.
+pub fn draw_items(
+    ctx: &PassContext,
+    program: &Program,
+    items: &[DrawItem],
+    mut extra: impl FnMut(&DrawItem),
+) {
+    let gl = ctx.gl;
+    let mut last_owner = None;
+    // SAFETY: the scene's VAO and buffers are valid; index ranges come from the GPU index buffer.
+    unsafe {
+        gl.bind_vertex_array(Some(ctx.gpu.vao));
+        gl.active_texture(glow::TEXTURE0);
+        for item in items {
+            if last_owner != Some(item.owner) {
+                let model = match item.owner {
+                    crate::scene::SurfaceOwner::World => glam::Mat4::IDENTITY,
+                    crate::scene::SurfaceOwner::Model(m) => ctx.scene.models[m].transform,
+                };
+                program.set_mat4(gl, "u_model", &model);
+                program.set_mat3(gl, "u_normal_model", &normal_matrix(&model));
+                last_owner = Some(item.owner);
+            }
+            let material = &ctx.scene.materials[item.material];
+            gl.active_texture(glow::TEXTURE0);
+            gl.bind_texture(
+                glow::TEXTURE_2D,
+                Some(ctx.gpu.texture_for(ctx.scene, item.material)),
+            );
+            program.set_i32(
+                gl,
+                "u_alpha_func",
+                material.alpha_test.map_or(0, |a| a.code()),
+            );
+            apply_cull(gl, material.cull);
+            extra(item);
+            gl.draw_elements(
+                glow::TRIANGLES,
+                item.index_count as i32,
+                glow::UNSIGNED_INT,
+                (item.first_index as usize * 4) as i32,
+            );
+        }
+        gl.bind_vertex_array(None);
+    }
+}

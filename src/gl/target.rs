@@ -1,0 +1,196 @@
+//! Our own framebuffers: every path (EGL, OSMesa, window) renders into one of these, never into the
+//! window system's buffer, so results are identical everywhere and can be read back.
+
+use glow::HasContext;
+
+/// The frame's "screen": RGBA8 colour plus a packed depth/stencil texture (24-bit depth, 8-bit
+/// stencil, as the paper's card had).
+pub struct Framebuffer {
+    pub fbo: glow::Framebuffer,
+    pub color: glow::Texture,
+    pub depth_stencil: glow::Texture,
+    pub width: u32,
+    pub height: u32,
+}
+
+impl Framebuffer {
+    pub fn new(gl: &glow::Context, width: u32, height: u32) -> Result<Framebuffer, String> {
+        // SAFETY: objects are created here and owned by the returned value; bindings reset to 0.
+        unsafe {
+            let color = gl.create_texture()?;
+            gl.bind_texture(glow::TEXTURE_2D, Some(color));
+            gl.tex_image_2d(
+                glow::TEXTURE_2D,
+                0,
+                glow::RGBA8 as i32,
+                width as i32,
+                height as i32,
+                0,
+                glow::RGBA,
+                glow::UNSIGNED_BYTE,
+                glow::PixelUnpackData::Slice(None),
+            );
+            set_nearest_clamp(gl);
+            let depth_stencil = gl.create_texture()?;
+            gl.bind_texture(glow::TEXTURE_2D, Some(depth_stencil));
+            gl.tex_image_2d(
+                glow::TEXTURE_2D,
+                0,
+                glow::DEPTH24_STENCIL8 as i32,
+                width as i32,
+                height as i32,
+                0,
+                glow::DEPTH_STENCIL,
+                glow::UNSIGNED_INT_24_8,
+                glow::PixelUnpackData::Slice(None),
+            );
+            set_nearest_clamp(gl);
+            gl.bind_texture(glow::TEXTURE_2D, None);
+            let fbo = gl.create_framebuffer()?;
+            gl.bind_framebuffer(glow::FRAMEBUFFER, Some(fbo));
+            gl.framebuffer_texture_2d(
+                glow::FRAMEBUFFER,
+                glow::COLOR_ATTACHMENT0,
+                glow::TEXTURE_2D,
+                Some(color),
+                0,
+            );
+            gl.framebuffer_texture_2d(
+                glow::FRAMEBUFFER,
+                glow::DEPTH_STENCIL_ATTACHMENT,
+                glow::TEXTURE_2D,
+                Some(depth_stencil),
+                0,
+            );
+            let status = gl.check_framebuffer_status(glow::FRAMEBUFFER);
+            gl.bind_framebuffer(glow::FRAMEBUFFER, None);
+            let fb = Framebuffer {
+                fbo,
+                color,
+                depth_stencil,
+                width,
+                height,
+            };
+            if status != glow::FRAMEBUFFER_COMPLETE {
+                fb.delete(gl);
+                return Err(format!(
+                    "framebuffer {width}x{height} is incomplete (status 0x{status:x})"
+                ));
+            }
+            Ok(fb)
+        }
+    }
+
+    pub fn bind(&self, gl: &glow::Context) {
+        // SAFETY: the framebuffer is complete.
+        unsafe {
+            gl.bind_framebuffer(glow::FRAMEBUFFER, Some(self.fbo));
+            gl.viewport(0, 0, self.width as i32, self.height as i32);
+        }
+    }
+
+    /// Bits of depth and stencil of the attachment, as GL reports them.
+    pub fn depth_stencil_bits(&self, gl: &glow::Context) -> (i32, i32) {
+        // SAFETY: attachment queries on our complete framebuffer.
+        unsafe {
+            gl.bind_framebuffer(glow::FRAMEBUFFER, Some(self.fbo));
+            let d = gl.get_framebuffer_attachment_parameter_i32(
+                glow::FRAMEBUFFER,
+                glow::DEPTH_ATTACHMENT,
+                glow::FRAMEBUFFER_ATTACHMENT_DEPTH_SIZE,
+            );
+            let s = gl.get_framebuffer_attachment_parameter_i32(
+                glow::FRAMEBUFFER,
+                glow::STENCIL_ATTACHMENT,
+                glow::FRAMEBUFFER_ATTACHMENT_STENCIL_SIZE,
+            );
+            gl.bind_framebuffer(glow::FRAMEBUFFER, None);
+            (d, s)
+        }
+    }
+
+    /// The colour attachment, top row first (GL's rows are bottom-up).
+    pub fn read_rgba(&self, gl: &glow::Context) -> Vec<u8> {
+        let (w, h) = (self.width as usize, self.height as usize);
+        let mut data = vec![0u8; w * h * 4];
+        // SAFETY: `data` holds exactly w*h RGBA8 pixels; pack alignment 1 avoids row padding.
+        unsafe {
+            gl.bind_framebuffer(glow::READ_FRAMEBUFFER, Some(self.fbo));
+            gl.read_buffer(glow::COLOR_ATTACHMENT0);
+            gl.pixel_store_i32(glow::PACK_ALIGNMENT, 1);
+            gl.read_pixels(
+                0,
+                0,
+                w as i32,
+                h as i32,
+                glow::RGBA,
+                glow::UNSIGNED_BYTE,
+                glow::PixelPackData::Slice(Some(&mut data)),
+            );
+            gl.bind_framebuffer(glow::READ_FRAMEBUFFER, None);
+        }
+        flip_rows(&mut data, w * 4);
+        data
+    }
+
+    pub fn delete(&self, gl: &glow::Context) {
+        // SAFETY: called once by the owner.
+        unsafe {
+            gl.delete_framebuffer(self.fbo);
+            gl.delete_texture(self.color);
+            gl.delete_texture(self.depth_stencil);
+        }
+    }
+}
+
+/// Reverses the order of rows of `row_bytes` bytes each.
+pub fn flip_rows<T: Copy>(data: &mut [T], row_len: usize) {
+    if row_len == 0 {
+        return;
+    }
+    let rows = data.len() / row_len;
+    for y in 0..rows / 2 {
+        let (top, bottom) = data.split_at_mut((rows - 1 - y) * row_len);
+        top[y * row_len..(y + 1) * row_len].swap_with_slice(&mut bottom[..row_len]);
+    }
+}
+
+/// Nearest filtering, clamped: for attachments and lookup tables.
+pub fn set_nearest_clamp(gl: &glow::Context) {
+    // SAFETY: parameters of the bound 2D texture.
+    unsafe {
+        gl.tex_parameter_i32(
+            glow::TEXTURE_2D,
+            glow::TEXTURE_MIN_FILTER,
+            glow::NEAREST as i32,
+        );
+        gl.tex_parameter_i32(
+            glow::TEXTURE_2D,
+            glow::TEXTURE_MAG_FILTER,
+            glow::NEAREST as i32,
+        );
+        gl.tex_parameter_i32(
+            glow::TEXTURE_2D,
+            glow::TEXTURE_WRAP_S,
+            glow::CLAMP_TO_EDGE as i32,
+        );
+        gl.tex_parameter_i32(
+            glow::TEXTURE_2D,
+            glow::TEXTURE_WRAP_T,
+            glow::CLAMP_TO_EDGE as i32,
+        );
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    #[test]
+    fn flip_rows_reverses_row_order() {
+        let mut d = vec![1, 1, 2, 2, 3, 3];
+        super::flip_rows(&mut d, 2);
+        assert_eq!(d, vec![3, 3, 2, 2, 1, 1]);
+        let mut e = vec![1, 2, 3, 4];
+        super::flip_rows(&mut e, 2);
+        assert_eq!(e, vec![3, 4, 1, 2]);
+    }
+}

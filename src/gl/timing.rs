@@ -1,0 +1,118 @@
+//! Per-pass timing: GL_TIME_ELAPSED queries around each GPU pass, wall time for CPU stages.
+//!
+//! Without timer queries (see `gl/caps`), each pass is timed on the CPU between two glFinish calls,
+//! which serialises the pipeline but still attributes time to the right pass. GL_TIMESTAMP is never
+//! used: llvmpipe's is not accurate. Query objects are pooled so long runs create none.
+
+use crate::frame::PassTime;
+use glow::HasContext;
+use std::time::Instant;
+
+enum Span {
+    Gpu(glow::Query),
+    Cpu(Instant),
+}
+
+pub struct PassTimer {
+    use_queries: bool,
+    pool: Vec<glow::Query>,
+    open: Option<(String, Span)>,
+    gpu_done: Vec<(String, glow::Query)>,
+    results: Vec<PassTime>,
+}
+
+impl PassTimer {
+    pub fn new(use_queries: bool) -> PassTimer {
+        PassTimer {
+            use_queries,
+            pool: Vec::new(),
+            open: None,
+            gpu_done: Vec::new(),
+            results: Vec::new(),
+        }
+    }
+
+    pub fn uses_queries(&self) -> bool {
+        self.use_queries
+    }
+
+    /// Starts timing the GPU work of pass `name`; ends any pass still open.
+    pub fn begin(&mut self, gl: &glow::Context, name: impl Into<String>) {
+        self.end(gl);
+        let name = name.into();
+        let span = if self.use_queries {
+            let q = match self.pool.pop() {
+                Some(q) => q,
+                // SAFETY: creating a query object on a current context.
+                None => match unsafe { gl.create_query() } {
+                    Ok(q) => q,
+                    Err(_) => {
+                        self.use_queries = false;
+                        return self.begin(gl, name);
+                    }
+                },
+            };
+            // SAFETY: no other TIME_ELAPSED query is active (end() closed it).
+            unsafe { gl.begin_query(glow::TIME_ELAPSED, q) };
+            Span::Gpu(q)
+        } else {
+            // SAFETY: glFinish has no preconditions.
+            unsafe { gl.finish() };
+            Span::Cpu(Instant::now())
+        };
+        self.open = Some((name, span));
+    }
+
+    /// Ends the open pass, if any.
+    pub fn end(&mut self, gl: &glow::Context) {
+        match self.open.take() {
+            Some((name, Span::Gpu(q))) => {
+                // SAFETY: this query was begun by begin().
+                unsafe { gl.end_query(glow::TIME_ELAPSED) };
+                self.gpu_done.push((name, q));
+            }
+            Some((name, Span::Cpu(t))) => {
+                // SAFETY: as above.
+                unsafe { gl.finish() };
+                self.results.push(PassTime {
+                    name,
+                    ms: t.elapsed().as_secs_f64() * 1e3,
+                    clock: "cpu",
+                });
+            }
+            None => {}
+        }
+    }
+
+    /// Records a CPU-only stage (e.g. building shadow volumes).
+    pub fn record_cpu(&mut self, name: impl Into<String>, ms: f64) {
+        self.results.push(PassTime {
+            name: name.into(),
+            ms,
+            clock: "cpu",
+        });
+    }
+
+    /// Closes the frame: waits for the query results and returns every pass in start order.
+    pub fn finish(&mut self, gl: &glow::Context) -> Vec<PassTime> {
+        self.end(gl);
+        for (name, q) in self.gpu_done.drain(..) {
+            // SAFETY: the query has ended; GL blocks until its result is available.
+            let ns = unsafe { gl.get_query_parameter_u64(q, glow::QUERY_RESULT) };
+            self.results.push(PassTime {
+                name,
+                ms: ns as f64 / 1e6,
+                clock: "gpu",
+            });
+            self.pool.push(q);
+        }
+        std::mem::take(&mut self.results)
+    }
+
+    pub fn delete(&mut self, gl: &glow::Context) {
+        for q in self.pool.drain(..) {
+            // SAFETY: pooled queries are not active.
+            unsafe { gl.delete_query(q) };
+        }
+    }
+}

@@ -1,0 +1,226 @@
+//! The scene on the GPU: one vertex buffer, one index buffer with surfaces sorted by draw state,
+//! textures and lightmaps. Built once per scene.
+
+use crate::scene::{Image, Scene, SurfaceOwner, Vertex};
+use glow::HasContext;
+
+/// A run of indices drawn with one state.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct DrawItem {
+    pub first_index: u32,
+    pub index_count: u32,
+    pub material: usize,
+    pub lightmap: Option<usize>,
+    pub owner: SurfaceOwner,
+}
+
+pub struct GpuScene {
+    pub vao: glow::VertexArray,
+    vbo: glow::Buffer,
+    ibo: glow::Buffer,
+    pub textures: Vec<glow::Texture>,
+    pub lightmaps: Vec<glow::Texture>,
+    /// Bound where a material has no texture.
+    pub white: glow::Texture,
+    /// Surfaces in draw-state order.
+    order: Vec<usize>,
+    /// First index of each surface (by scene surface index) in the GPU index buffer.
+    gpu_first: Vec<u32>,
+    pub index_count: usize,
+}
+
+fn state_key(scene: &Scene, s: usize) -> (u8, usize, usize, usize) {
+    let surf = &scene.surfaces[s];
+    let owner = match surf.owner {
+        SurfaceOwner::World => (0, 0),
+        SurfaceOwner::Model(m) => (1, m),
+    };
+    (
+        owner.0,
+        owner.1,
+        surf.material,
+        surf.lightmap.map_or(0, |l| l + 1),
+    )
+}
+
+fn upload_image(
+    gl: &glow::Context,
+    image: &Image,
+    mipmaps: bool,
+    repeat: bool,
+) -> Result<glow::Texture, String> {
+    // SAFETY: the image holds width*height RGBA8 texels (checked by the loaders); unpack
+    // alignment 1 accepts any width.
+    unsafe {
+        let tex = gl.create_texture()?;
+        gl.bind_texture(glow::TEXTURE_2D, Some(tex));
+        gl.pixel_store_i32(glow::UNPACK_ALIGNMENT, 1);
+        gl.tex_image_2d(
+            glow::TEXTURE_2D,
+            0,
+            glow::RGBA8 as i32,
+            image.width as i32,
+            image.height as i32,
+            0,
+            glow::RGBA,
+            glow::UNSIGNED_BYTE,
+            glow::PixelUnpackData::Slice(Some(&image.rgba)),
+        );
+        let wrap = if repeat {
+            glow::REPEAT
+        } else {
+            glow::CLAMP_TO_EDGE
+        } as i32;
+        gl.tex_parameter_i32(glow::TEXTURE_2D, glow::TEXTURE_WRAP_S, wrap);
+        gl.tex_parameter_i32(glow::TEXTURE_2D, glow::TEXTURE_WRAP_T, wrap);
+        gl.tex_parameter_i32(
+            glow::TEXTURE_2D,
+            glow::TEXTURE_MAG_FILTER,
+            glow::LINEAR as i32,
+        );
+        if mipmaps {
+            gl.generate_mipmap(glow::TEXTURE_2D);
+            gl.tex_parameter_i32(
+                glow::TEXTURE_2D,
+                glow::TEXTURE_MIN_FILTER,
+                glow::LINEAR_MIPMAP_LINEAR as i32,
+            );
+        } else {
+            gl.tex_parameter_i32(
+                glow::TEXTURE_2D,
+                glow::TEXTURE_MIN_FILTER,
+                glow::LINEAR as i32,
+            );
+        }
+        gl.bind_texture(glow::TEXTURE_2D, None);
+        Ok(tex)
+    }
+}
+
+impl GpuScene {
+    pub fn new(
+        gl: &glow::Context,
+        scene: &Scene,
+        max_texture_size: u32,
+    ) -> Result<GpuScene, String> {
+        let mut order: Vec<usize> = (0..scene.surfaces.len()).collect();
+        order.sort_by_key(|&s| state_key(scene, s));
+        let mut indices = Vec::with_capacity(scene.indices.len());
+        let mut gpu_first = vec![0u32; scene.surfaces.len()];
+        for &s in &order {
+            let surf = &scene.surfaces[s];
+            gpu_first[s] = indices.len() as u32;
+            let range = surf.first_index as usize..(surf.first_index + surf.index_count) as usize;
+            indices.extend_from_slice(&scene.indices[range]);
+        }
+        let fit = |img: &Image| -> Image {
+            if img.width.max(img.height) > max_texture_size || img.width == 0 || img.height == 0 {
+                log::warn!(
+                    "texture {}x{} exceeds GL_MAX_TEXTURE_SIZE {max_texture_size}; drawing white",
+                    img.width,
+                    img.height
+                );
+                Image::solid([255, 255, 255, 255])
+            } else {
+                img.clone()
+            }
+        };
+        // SAFETY: buffers are created and filled from slices of plain-old-data vertices.
+        unsafe {
+            let vao = gl.create_vertex_array()?;
+            gl.bind_vertex_array(Some(vao));
+            let vbo = gl.create_buffer()?;
+            gl.bind_buffer(glow::ARRAY_BUFFER, Some(vbo));
+            let bytes = std::slice::from_raw_parts(
+                scene.vertices.as_ptr() as *const u8,
+                std::mem::size_of_val(scene.vertices.as_slice()),
+            );
+            gl.buffer_data_u8_slice(glow::ARRAY_BUFFER, bytes, glow::STATIC_DRAW);
+            let stride = std::mem::size_of::<Vertex>() as i32;
+            let attrs: [(u32, i32, i32); 4] = [(0, 3, 0), (1, 3, 12), (2, 2, 24), (3, 2, 32)];
+            for (loc, size, offset) in attrs {
+                gl.enable_vertex_attrib_array(loc);
+                gl.vertex_attrib_pointer_f32(loc, size, glow::FLOAT, false, stride, offset);
+            }
+            let ibo = gl.create_buffer()?;
+            gl.bind_buffer(glow::ELEMENT_ARRAY_BUFFER, Some(ibo));
+            let ibytes = std::slice::from_raw_parts(
+                indices.as_ptr() as *const u8,
+                std::mem::size_of_val(indices.as_slice()),
+            );
+            gl.buffer_data_u8_slice(glow::ELEMENT_ARRAY_BUFFER, ibytes, glow::STATIC_DRAW);
+            gl.bind_vertex_array(None);
+            let textures = scene
+                .textures
+                .iter()
+                .map(|t| upload_image(gl, &fit(t), true, true))
+                .collect::<Result<_, _>>()?;
+            let lightmaps = scene
+                .lightmaps
+                .iter()
+                .map(|t| upload_image(gl, &fit(t), false, false))
+                .collect::<Result<_, _>>()?;
+            let white = upload_image(gl, &Image::solid([255, 255, 255, 255]), false, true)?;
+            Ok(GpuScene {
+                vao,
+                vbo,
+                ibo,
+                textures,
+                lightmaps,
+                white,
+                order,
+                gpu_first,
+                index_count: indices.len(),
+            })
+        }
+    }
+
+    /// The surfaces `keep` admits, merged into as few draws as the state order allows.
+    pub fn draw_list(&self, scene: &Scene, mut keep: impl FnMut(usize) -> bool) -> Vec<DrawItem> {
+        let mut items: Vec<DrawItem> = Vec::new();
+        for &s in &self.order {
+            if !keep(s) {
+                continue;
+            }
+            let surf = &scene.surfaces[s];
+            let first = self.gpu_first[s];
+            if let Some(last) = items.last_mut()
+                && last.material == surf.material
+                && last.lightmap == surf.lightmap
+                && last.owner == surf.owner
+                && last.first_index + last.index_count == first
+            {
+                last.index_count += surf.index_count;
+                continue;
+            }
+            items.push(DrawItem {
+                first_index: first,
+                index_count: surf.index_count,
+                material: surf.material,
+                lightmap: surf.lightmap,
+                owner: surf.owner,
+            });
+        }
+        items
+    }
+
+    pub fn texture_for(&self, scene: &Scene, material: usize) -> glow::Texture {
+        scene.materials[material]
+            .texture
+            .and_then(|t| self.textures.get(t).copied())
+            .unwrap_or(self.white)
+    }
+
+    pub fn delete(&self, gl: &glow::Context) {
+        // SAFETY: called once by the owner.
+        unsafe {
+            gl.delete_vertex_array(self.vao);
+            gl.delete_buffer(self.vbo);
+            gl.delete_buffer(self.ibo);
+            for t in self.textures.iter().chain(&self.lightmaps) {
+                gl.delete_texture(*t);
+            }
+            gl.delete_texture(self.white);
+        }
+    }
+}

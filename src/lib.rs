@@ -1,0 +1,13 @@
+//! shadowlab: the classic hardware shadow pipeline of Arneson's "Real-Time Shadows" (shadow maps
+//! and stenciled shadow volumes on Quake 3 maps), with every fixed-function choice a runtime option,
+//! measured against an exact ray-cast reference.
+//!
+//! Data flows one way: loaders → [`scene::Scene`] → [`plan::Plan`] → GL passes → [`frame::Frame`]
+//! → reports.
+
+pub mod frame;
+pub mod gl;
+pub mod options;
+pub mod plan;
+pub mod scene;
+pub mod shadow;

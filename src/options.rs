@@ -1,0 +1,486 @@
+//! Every pipeline choice of shadowlab, in one place.
+//!
+//! Each option is one field with a one-line meaning and, as its default, the choice the paper
+//! (Arneson, "Real-Time Shadows") or the thesis (Sindholt 2005) made. The same keys are set from the
+//! command line (`--set key=value`), from scene files (`[options]`), by bench sweeps and by the
+//! viewer's panels; `shadowlab options` lists them.
+//!
+//! Options are declared once with [`define_options!`], which generates the plain-data structs
+//! (serde), their defaults, the string setters and getters, and the listing.
+
+use serde::{Deserialize, Serialize};
+use std::collections::BTreeMap;
+use std::fmt;
+use thiserror::Error;
+
+/// Why an option could not be set.
+#[derive(Debug, Error, PartialEq)]
+pub enum OptionError {
+    #[error("unknown option `{0}` (run `shadowlab options` for the list)")]
+    UnknownKey(String),
+    #[error("option `{key}`: cannot use `{value}`: {reason}")]
+    BadValue {
+        key: String,
+        value: String,
+        reason: String,
+    },
+    #[error("`{0}` is not of the form key=value")]
+    NotAssignment(String),
+}
+
+/// A type an option can hold: parsed from and written to the strings of `--set key=value`.
+pub trait OptionValue: Sized {
+    /// How `shadowlab options` describes the type, e.g. `u32` or `nearest|hw2x2|pcf3x3`.
+    fn type_name() -> String;
+    fn parse_value(text: &str) -> Result<Self, String>;
+    fn format_value(&self) -> String;
+    /// Bounds check for numbers; other types accept every parsed value.
+    fn check_range(&self, _lo: f64, _hi: f64) -> Result<(), String> {
+        Ok(())
+    }
+}
+
+macro_rules! numeric_option_value {
+    ($($t:ty),*) => {$(
+        impl OptionValue for $t {
+            fn type_name() -> String {
+                stringify!($t).to_string()
+            }
+            fn parse_value(text: &str) -> Result<Self, String> {
+                text.trim().parse::<$t>().map_err(|e| e.to_string())
+            }
+            fn format_value(&self) -> String {
+                self.to_string()
+            }
+            fn check_range(&self, lo: f64, hi: f64) -> Result<(), String> {
+                let v = *self as f64;
+                if v.is_finite() && v >= lo && v <= hi {
+                    Ok(())
+                } else {
+                    Err(format!("must be within {lo}..={hi}"))
+                }
+            }
+        }
+    )*};
+}
+numeric_option_value!(u32, f32);
+
+impl OptionValue for bool {
+    fn type_name() -> String {
+        "bool".to_string()
+    }
+    fn parse_value(text: &str) -> Result<Self, String> {
+        match text.trim().to_ascii_lowercase().as_str() {
+            "true" | "on" | "yes" | "1" => Ok(true),
+            "false" | "off" | "no" | "0" => Ok(false),
+            other => Err(format!(
+                "`{other}` is not one of true|false|on|off|yes|no|1|0"
+            )),
+        }
+    }
+    fn format_value(&self) -> String {
+        self.to_string()
+    }
+}
+
+/// Declares an enum whose variants are option values, written in snake_case.
+#[macro_export]
+macro_rules! option_enum {
+    (
+        $(#[doc = $doc:literal])*
+        pub enum $name:ident { $( $(#[doc = $vdoc:literal])* $variant:ident = $text:literal ),+ $(,)? }
+    ) => {
+        $(#[doc = $doc])*
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, serde::Serialize, serde::Deserialize)]
+        pub enum $name { $( $(#[doc = $vdoc])* #[serde(rename = $text)] $variant ),+ }
+
+        impl $name {
+            /// Every value, in declaration order (the default first).
+            pub const ALL: &'static [$name] = &[$($name::$variant),+];
+            pub fn as_str(self) -> &'static str {
+                match self { $($name::$variant => $text),+ }
+            }
+        }
+
+        impl std::fmt::Display for $name {
+            fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+                f.write_str(self.as_str())
+            }
+        }
+
+        impl $crate::options::OptionValue for $name {
+            fn type_name() -> String {
+                [$($text),+].join("|")
+            }
+            fn parse_value(text: &str) -> Result<Self, String> {
+                let t = text.trim();
+                $( if t.eq_ignore_ascii_case($text) { return Ok($name::$variant); } )+
+                Err(format!("expected one of {}", Self::type_name()))
+            }
+            fn format_value(&self) -> String {
+                self.as_str().to_string()
+            }
+        }
+    };
+}
+
+/// One row of `shadowlab options`.
+#[derive(Debug, Clone, Serialize)]
+pub struct OptionSpec {
+    pub key: &'static str,
+    #[serde(rename = "type")]
+    pub type_name: String,
+    pub default: String,
+    pub meaning: String,
+}
+
+fn join_doc(lines: &[&str]) -> String {
+    lines
+        .iter()
+        .map(|l| l.trim())
+        .filter(|l| !l.is_empty())
+        .collect::<Vec<_>>()
+        .join(" ")
+}
+
+fn bad_value(key: &str, value: &str, reason: String) -> OptionError {
+    OptionError::BadValue {
+        key: key.to_string(),
+        value: value.to_string(),
+        reason,
+    }
+}
+
+/// Declares the option groups. Each group is a struct (the root group is [`Options`] itself); each
+/// field has its doc lines (the first is the one-line meaning), type, default and optional range.
+macro_rules! define_options {
+    (
+        root {
+            $( $(#[doc = $rdoc:literal])* $rfield:ident : $rty:ty = $rdefault:expr $(, in $rlo:literal ..= $rhi:literal)? ; )*
+        }
+        $(
+            $(#[doc = $gdoc:literal])*
+            group $group:ident : $gty:ident {
+                $( $(#[doc = $fdoc:literal])* $field:ident : $fty:ty = $fdefault:expr $(, in $flo:literal ..= $fhi:literal)? ; )*
+            }
+        )*
+    ) => {
+        $(
+            $(#[doc = $gdoc])*
+            #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+            #[serde(default, deny_unknown_fields)]
+            pub struct $gty {
+                $( $(#[doc = $fdoc])* pub $field: $fty, )*
+            }
+
+            impl Default for $gty {
+                fn default() -> Self {
+                    Self { $( $field: $fdefault, )* }
+                }
+            }
+        )*
+
+        /// Every pipeline choice. `Options::default()` is the paper's pipeline.
+        #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+        #[serde(default, deny_unknown_fields)]
+        pub struct Options {
+            $( $(#[doc = $rdoc])* pub $rfield: $rty, )*
+            $( $(#[doc = $gdoc])* pub $group: $gty, )*
+        }
+
+        impl Default for Options {
+            fn default() -> Self {
+                Self {
+                    $( $rfield: $rdefault, )*
+                    $( $group: $gty::default(), )*
+                }
+            }
+        }
+
+        impl Options {
+            /// Every key with its type, default and meaning, in declaration order.
+            pub fn specs() -> Vec<OptionSpec> {
+                let defaults = Options::default();
+                let mut specs = Vec::new();
+                $(
+                    specs.push(OptionSpec {
+                        key: stringify!($rfield),
+                        type_name: <$rty as OptionValue>::type_name()
+                            $( + &format!(" ({}..={})", $rlo, $rhi) )?,
+                        default: defaults.$rfield.format_value(),
+                        meaning: join_doc(&[$($rdoc),*]),
+                    });
+                )*
+                $($(
+                    specs.push(OptionSpec {
+                        key: concat!(stringify!($group), ".", stringify!($field)),
+                        type_name: <$fty as OptionValue>::type_name()
+                            $( + &format!(" ({}..={})", $flo, $fhi) )?,
+                        default: defaults.$group.$field.format_value(),
+                        meaning: join_doc(&[$($fdoc),*]),
+                    });
+                )*)*
+                specs
+            }
+
+            /// Sets one option from its textual value, checking type and range.
+            pub fn set(&mut self, key: &str, value: &str) -> Result<(), OptionError> {
+                match key.trim() {
+                    $(
+                        stringify!($rfield) => {
+                            let v = <$rty as OptionValue>::parse_value(value)
+                                .map_err(|r| bad_value(key, value, r))?;
+                            $( v.check_range($rlo as f64, $rhi as f64).map_err(|r| bad_value(key, value, r))?; )?
+                            self.$rfield = v;
+                            Ok(())
+                        }
+                    )*
+                    $($(
+                        concat!(stringify!($group), ".", stringify!($field)) => {
+                            let v = <$fty as OptionValue>::parse_value(value)
+                                .map_err(|r| bad_value(key, value, r))?;
+                            $( v.check_range($flo as f64, $fhi as f64).map_err(|r| bad_value(key, value, r))?; )?
+                            self.$group.$field = v;
+                            Ok(())
+                        }
+                    )*)*
+                    other => Err(OptionError::UnknownKey(other.to_string())),
+                }
+            }
+
+            /// The current value of one option, as `--set` would write it.
+            pub fn get(&self, key: &str) -> Result<String, OptionError> {
+                match key.trim() {
+                    $( stringify!($rfield) => Ok(self.$rfield.format_value()), )*
+                    $($( concat!(stringify!($group), ".", stringify!($field)) => Ok(self.$group.$field.format_value()), )*)*
+                    other => Err(OptionError::UnknownKey(other.to_string())),
+                }
+            }
+        }
+    };
+}
+
+option_enum! {
+    /// Which GL context path to take.
+    pub enum BackendChoice {
+        /// EGL device first, then OSMesa.
+        Auto = "auto",
+        /// EGL device platform, surfaceless context, rendering into our own framebuffers.
+        Egl = "egl",
+        /// libOSMesa loaded at run time.
+        Osmesa = "osmesa",
+        /// A winit window with a glutin context (needs a display, e.g. `xvfb-run`).
+        Window = "window",
+    }
+}
+
+option_enum! {
+    /// Which shadow algorithm the lit passes use.
+    pub enum Technique {
+        /// No shadows: every receiver is lit (the base renderer, paper section 2).
+        None = "none",
+    }
+}
+
+define_options! {
+    root {
+        /// Shadow technique for every light.
+        technique: Technique = Technique::None;
+        /// Frame width in pixels (the paper renders 640x480).
+        width: u32 = 640, in 16 ..= 16384;
+        /// Frame height in pixels.
+        height: u32 = 480, in 16 ..= 16384;
+        /// GL context path: auto tries egl, then osmesa.
+        backend: BackendChoice = BackendChoice::Auto;
+    }
+
+    /// Lights and the unshadowed lighting model.
+    group lighting: LightingOptions {
+        /// Draw the per-light additive passes at all (off = only the unlit world).
+        lights: bool = true;
+        /// Comma-separated light indices to draw, or `all`.
+        only: String = "all".to_string();
+        /// Brightness of the unlit pass where a surface has no lightmap (built-in scene, paper 2.4).
+        ambient: f32 = 0.2, in 0.0 ..= 4.0;
+        /// Constant light level of MD3 models in the unlit pass (paper 2.5: "constant, moderate").
+        model_ambient: f32 = 0.5, in 0.0 ..= 4.0;
+        /// Multiplier on every dynamic light's colour.
+        intensity: f32 = 1.0, in 0.0 ..= 16.0;
+    }
+}
+
+impl OptionValue for String {
+    fn type_name() -> String {
+        "string".to_string()
+    }
+    fn parse_value(text: &str) -> Result<Self, String> {
+        Ok(text.trim().to_string())
+    }
+    fn format_value(&self) -> String {
+        self.clone()
+    }
+}
+
+impl Options {
+    /// Applies `key=value`.
+    pub fn set_assignment(&mut self, assignment: &str) -> Result<(), OptionError> {
+        let (key, value) = assignment
+            .split_once('=')
+            .ok_or_else(|| OptionError::NotAssignment(assignment.to_string()))?;
+        self.set(key, value)
+    }
+
+    /// Every key with its current value.
+    pub fn to_map(&self) -> BTreeMap<String, String> {
+        Self::specs()
+            .into_iter()
+            .map(|s| {
+                let v = self.get(s.key).expect("every spec key is gettable");
+                (s.key.to_string(), v)
+            })
+            .collect()
+    }
+
+    /// Applies a TOML table of overrides (a scene file's `[options]`): either dotted keys
+    /// (`"shadow_map.size" = 1024`) or nested tables (`[options.shadow_map] size = 1024`).
+    pub fn apply_toml(&mut self, table: &toml::Table) -> Result<(), OptionError> {
+        fn walk(opts: &mut Options, prefix: &str, table: &toml::Table) -> Result<(), OptionError> {
+            for (k, v) in table {
+                let key = if prefix.is_empty() {
+                    k.clone()
+                } else {
+                    format!("{prefix}.{k}")
+                };
+                match v {
+                    toml::Value::Table(t) => walk(opts, &key, t)?,
+                    toml::Value::String(s) => opts.set(&key, s)?,
+                    toml::Value::Integer(i) => opts.set(&key, &i.to_string())?,
+                    toml::Value::Float(f) => opts.set(&key, &f.to_string())?,
+                    toml::Value::Boolean(b) => opts.set(&key, &b.to_string())?,
+                    other => {
+                        return Err(bad_value(
+                            &key,
+                            &other.to_string(),
+                            "expected a string, number or bool".into(),
+                        ));
+                    }
+                }
+            }
+            Ok(())
+        }
+        walk(self, "", table)
+    }
+
+    /// Which lights the `lighting.only` filter admits, for a scene with `count` lights.
+    pub fn light_enabled(&self, index: usize) -> bool {
+        if !self.lighting.lights {
+            return false;
+        }
+        let only = self.lighting.only.trim();
+        if only.is_empty() || only.eq_ignore_ascii_case("all") {
+            return true;
+        }
+        only.split(',')
+            .filter_map(|s| s.trim().parse::<usize>().ok())
+            .any(|i| i == index)
+    }
+
+    /// Validates cross-field rules that a single `set` cannot see.
+    pub fn validate(&self) -> Result<(), OptionError> {
+        let only = self.lighting.only.trim();
+        if !(only.is_empty() || only.eq_ignore_ascii_case("all")) {
+            for part in only.split(',') {
+                if part.trim().parse::<usize>().is_err() {
+                    return Err(bad_value(
+                        "lighting.only",
+                        only,
+                        "expected `all` or comma-separated light indices".into(),
+                    ));
+                }
+            }
+        }
+        Ok(())
+    }
+}
+
+impl fmt::Display for Options {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        for (k, v) in self.to_map() {
+            writeln!(f, "{k} = {v}")?;
+        }
+        Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn defaults_are_the_papers_choices() {
+        let o = Options::default();
+        assert_eq!((o.width, o.height), (640, 480));
+        assert_eq!(o.technique, Technique::None);
+    }
+
+    #[test]
+    fn set_and_get_round_trip_for_every_key() {
+        let defaults = Options::default();
+        for spec in Options::specs() {
+            let mut o = Options::default();
+            o.set(spec.key, &spec.default).unwrap();
+            assert_eq!(o, defaults, "{}", spec.key);
+            assert_eq!(o.get(spec.key).unwrap(), spec.default);
+            assert!(!spec.meaning.is_empty(), "{} has no meaning", spec.key);
+        }
+    }
+
+    #[test]
+    fn bad_values_are_rejected_with_the_key() {
+        let mut o = Options::default();
+        assert!(matches!(
+            o.set("nope", "1"),
+            Err(OptionError::UnknownKey(_))
+        ));
+        assert!(matches!(
+            o.set("width", "abc"),
+            Err(OptionError::BadValue { .. })
+        ));
+        assert!(matches!(
+            o.set("width", "0"),
+            Err(OptionError::BadValue { .. })
+        ));
+        assert!(matches!(
+            o.set("backend", "vulkan"),
+            Err(OptionError::BadValue { .. })
+        ));
+        assert!(matches!(
+            o.set("lighting.ambient", "NaN"),
+            Err(OptionError::BadValue { .. })
+        ));
+        o.set("backend", "OSMesa").unwrap();
+        assert_eq!(o.backend, BackendChoice::Osmesa);
+    }
+
+    #[test]
+    fn toml_overrides_accept_dotted_and_nested_keys() {
+        let mut o = Options::default();
+        let t: toml::Table =
+            toml::from_str("width = 320\n\"lighting.ambient\" = 0.5\n[lighting]\nlights = false\n")
+                .unwrap();
+        o.apply_toml(&t).unwrap();
+        assert_eq!(o.width, 320);
+        assert_eq!(o.lighting.ambient, 0.5);
+        assert!(!o.lighting.lights);
+    }
+
+    #[test]
+    fn light_filter() {
+        let mut o = Options::default();
+        assert!(o.light_enabled(3));
+        o.set("lighting.only", "0, 2").unwrap();
+        assert!(o.light_enabled(0) && !o.light_enabled(1) && o.light_enabled(2));
+        o.set("lighting.only", "x").unwrap();
+        assert!(o.validate().is_err());
+    }
+}

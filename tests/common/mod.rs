@@ -1,0 +1,59 @@
+//! Shared helpers of the integration tests: GL on a chosen path, rendering, image comparison.
+#![allow(dead_code)]
+
+use shadowlab::frame::Frame;
+use shadowlab::gl::{GlContext, Renderer, create_context};
+use shadowlab::options::{BackendChoice, Options};
+use shadowlab::scene::Scene;
+
+/// A context on `backend` with a renderer for `options`' frame size. Panics with the
+/// context error (which names the packages to install) if the path cannot start.
+pub fn gl_on(backend: BackendChoice, options: &Options) -> (GlContext, Renderer) {
+    let ctx =
+        create_context(backend, options.width, options.height).unwrap_or_else(|e| panic!("{e}"));
+    let renderer = Renderer::new(ctx.gl.clone(), options.width, options.height)
+        .unwrap_or_else(|e| panic!("{e}"));
+    (ctx, renderer)
+}
+
+/// Renders one frame of `scene` headless (EGL).
+pub fn render(scene: &Scene, options: &Options) -> Frame {
+    render_on(BackendChoice::Egl, scene, options)
+}
+
+pub fn render_on(backend: BackendChoice, scene: &Scene, options: &Options) -> Frame {
+    let (_ctx, mut r) = gl_on(backend, options);
+    r.load_scene(scene).unwrap();
+    r.render(scene, options).unwrap()
+}
+
+/// Largest per-channel difference and the number of pixels that differ at all.
+pub fn image_difference(a: &Frame, b: &Frame) -> (u8, usize) {
+    assert_eq!((a.width, a.height), (b.width, b.height));
+    let mut max = 0u8;
+    let mut differing = 0;
+    for (pa, pb) in a.rgba.chunks_exact(4).zip(b.rgba.chunks_exact(4)) {
+        let d = pa
+            .iter()
+            .zip(pb)
+            .map(|(x, y)| x.abs_diff(*y))
+            .max()
+            .unwrap();
+        max = max.max(d);
+        differing += (d > 0) as usize;
+    }
+    (max, differing)
+}
+
+/// Mean luma over a square of pixels around (x, y).
+pub fn mean_luma(f: &Frame, (x, y): (u32, u32), radius: u32) -> f32 {
+    let mut sum = 0.0;
+    let mut n = 0.0;
+    for yy in y.saturating_sub(radius)..(y + radius + 1).min(f.height) {
+        for xx in x.saturating_sub(radius)..(x + radius + 1).min(f.width) {
+            sum += f.luma(xx, yy);
+            n += 1.0;
+        }
+    }
+    sum / n
+}

@@ -1,0 +1,202 @@
+//! Foundation: the built-in scene renders headless on every context path, deterministically.
+
+mod common;
+
+use common::{image_difference, mean_luma, render, render_on};
+use glam::Vec3;
+use shadowlab::options::{BackendChoice, Options};
+use shadowlab::scene::builtin::{self, SPOT_POSITION, SPOT_TARGET};
+use std::process::Command;
+
+#[test]
+fn floor_under_the_spot_light_is_brighter_than_outside_its_cone() {
+    let scene = builtin::default_scene();
+    let mut options = Options::default();
+    // Only the spot light, so the omni light cannot brighten the comparison point.
+    options.set("lighting.only", "0").unwrap();
+    let frame = render(&scene, &options);
+    assert_eq!((frame.width, frame.height), (640, 480));
+    // The spot aims at SPOT_TARGET on the floor; (150, -200) on the floor is > 38° off its axis.
+    let axis = (SPOT_TARGET - SPOT_POSITION).normalize();
+    let outside = Vec3::new(180.0, -200.0, 0.0);
+    let off_axis = (outside - SPOT_POSITION)
+        .normalize()
+        .dot(axis)
+        .acos()
+        .to_degrees();
+    assert!(off_axis > builtin::SPOT_CUTOFF_DEG + 5.0, "{off_axis}");
+    let lit = mean_luma(&frame, frame.project(SPOT_TARGET).unwrap(), 3);
+    let unlit = mean_luma(&frame, frame.project(outside).unwrap(), 3);
+    assert!(lit > unlit * 2.0, "inside the cone {lit}, outside {unlit}");
+    // Outside the cone only the unlit pass remains: floor texture (~112..150) x ambient 0.2.
+    assert!(unlit > 15.0 && unlit < 35.0, "{unlit}");
+}
+
+#[test]
+fn lights_off_leaves_only_the_ambient_level() {
+    let scene = builtin::default_scene();
+    let mut on = Options::default();
+    on.set("lighting.only", "0").unwrap();
+    let mut off = on.clone();
+    off.set("lighting.lights", "false").unwrap();
+    let (a, b) = (render(&scene, &on), render(&scene, &off));
+    let p = a.project(SPOT_TARGET).unwrap();
+    assert!(mean_luma(&a, p, 2) > 3.0 * mean_luma(&b, p, 2));
+}
+
+#[test]
+fn two_renders_are_bit_identical() {
+    let scene = builtin::default_scene();
+    let options = Options::default();
+    let a = render(&scene, &options);
+    let b = render(&scene, &options);
+    assert_eq!(image_difference(&a, &b), (0, 0));
+}
+
+#[test]
+fn osmesa_matches_egl() {
+    let scene = builtin::default_scene();
+    let options = Options::default();
+    // Separate threads: each library's context is current only on its own thread.
+    let s2 = scene.clone();
+    let o2 = options.clone();
+    let egl = std::thread::spawn(move || render_on(BackendChoice::Egl, &s2, &o2))
+        .join()
+        .unwrap();
+    let osmesa = std::thread::spawn(move || render_on(BackendChoice::Osmesa, &scene, &options))
+        .join()
+        .unwrap();
+    let (max, differing) = image_difference(&egl, &osmesa);
+    // Both are llvmpipe; allow rounding differences in at most 0.1% of pixels.
+    assert!(max <= 2, "max channel difference {max}");
+    assert!(differing <= 307, "{differing} pixels differ");
+}
+
+fn shadowlab() -> Command {
+    Command::new(env!("CARGO_BIN_EXE_shadowlab"))
+}
+
+#[test]
+fn forcing_a_backend_that_cannot_start_gives_the_documented_error() {
+    let out = shadowlab()
+        .args(["info", "--backend", "window"])
+        .env_remove("DISPLAY")
+        .env_remove("WAYLAND_DISPLAY")
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(1), "must fail, not panic");
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        err.contains("no OpenGL 3.3 core context could be created"),
+        "{err}"
+    );
+    assert!(err.contains("window:") && err.contains("xvfb"), "{err}");
+    assert!(!err.contains("panicked"), "{err}");
+
+    let out = shadowlab()
+        .args(["info", "--backend", "osmesa"])
+        .env("SHADOWLAB_OSMESA_LIBRARY", "/nonexistent/libOSMesa.so.8")
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(1));
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("osmesa: libOSMesa not found"), "{err}");
+    assert!(err.contains("libosmesa6"), "{err}");
+}
+
+#[test]
+fn info_json_reports_llvmpipe_on_the_egl_path() {
+    let out = shadowlab().args(["info", "--json"]).output().unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert_eq!(v["backend"], "egl");
+    assert!(v["version"].as_str().unwrap().len() > 3);
+    assert!(v["renderer"].as_str().unwrap().len() > 3);
+    let fallbacks = v["fallbacks"].as_array().unwrap();
+    assert!(fallbacks.iter().all(|f| f.is_string()));
+    // Every missing feature appears as a fallback, and only those.
+    let missing = v["features"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .filter(|f| f["supported"] == false)
+        .count();
+    assert_eq!(missing, fallbacks.len());
+    if v["software"] == true {
+        // llvmpipe lacks EXT_depth_bounds_test (DEVELOPERS.md).
+        assert!(
+            fallbacks
+                .iter()
+                .any(|f| f.as_str().unwrap().starts_with("depth_bounds"))
+        );
+    }
+}
+
+#[test]
+fn render_writes_a_png_of_the_requested_size() {
+    let dir = std::env::temp_dir().join(format!("shadowlab-test-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let out = dir.join("r.png");
+    let status = shadowlab()
+        .args(["render", "--size", "320x240", "--out"])
+        .arg(&out)
+        .status()
+        .unwrap();
+    assert!(status.success());
+    let img = image::open(&out).unwrap();
+    assert_eq!((img.width(), img.height()), (320, 240));
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+#[test]
+fn window_path_works_under_xvfb() {
+    let have_xvfb = Command::new("sh")
+        .args(["-c", "command -v xvfb-run"])
+        .output()
+        .map(|o| o.status.success())
+        .unwrap_or(false);
+    assert!(
+        have_xvfb,
+        "xvfb-run is missing: install the Debian package `xvfb` (apt-get install xvfb xauth)"
+    );
+    let dir = std::env::temp_dir().join(format!("shadowlab-xvfb-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let (w, e) = (dir.join("w.png"), dir.join("e.png"));
+    let status = Command::new("xvfb-run")
+        .args([
+            "-a",
+            env!("CARGO_BIN_EXE_shadowlab"),
+            "render",
+            "--backend",
+            "window",
+            "--out",
+        ])
+        .arg(&w)
+        .status()
+        .unwrap();
+    assert!(status.success());
+    assert!(
+        shadowlab()
+            .args(["render", "--out"])
+            .arg(&e)
+            .status()
+            .unwrap()
+            .success()
+    );
+    // Both paths render into our own framebuffer on llvmpipe: the same image.
+    let (a, b) = (
+        image::open(&w).unwrap().to_rgba8(),
+        image::open(&e).unwrap().to_rgba8(),
+    );
+    assert_eq!(a.dimensions(), (640, 480));
+    let differing = a.pixels().zip(b.pixels()).filter(|(x, y)| x != y).count();
+    assert!(
+        differing <= 307,
+        "{differing} pixels differ between window and egl"
+    );
+    std::fs::remove_dir_all(&dir).ok();
+}
