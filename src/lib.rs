@@ -9,5 +9,6 @@ pub mod frame;
 pub mod gl;
 pub mod options;
 pub mod plan;
+pub mod q3;
 pub mod scene;
 pub mod shadow;

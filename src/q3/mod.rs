@@ -1,0 +1,8 @@
+//! Quake 3 content: pk3 archives, IBSP v46 maps, Bezier patches, shader scripts, MD3 models,
+//! entities and DarkPlaces `.rtlights` files. Everything here is GL-free and never panics on bad
+//! input: each loader returns a `thiserror` error naming what is wrong.
+
+pub mod entities;
+pub mod md3;
+pub mod rtlights;
+pub mod shader;
