@@ -4,6 +4,7 @@ in vec3 v_world;
 in vec3 v_normal;
 in vec2 v_uv;
 in vec2 v_lightmap_uv;
+in vec3 v_color;
 
 uniform sampler2D u_texture;
 uniform int u_alpha_func;

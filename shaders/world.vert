@@ -5,6 +5,7 @@ layout(location = 0) in vec3 a_position;
 layout(location = 1) in vec3 a_normal;
 layout(location = 2) in vec2 a_uv;
 layout(location = 3) in vec2 a_lightmap_uv;
+layout(location = 4) in vec4 a_color;
 
 uniform mat4 u_model;        // owner space -> world
 uniform mat3 u_normal_model; // inverse transpose of u_model's upper 3x3
@@ -14,6 +15,7 @@ out vec3 v_world;
 out vec3 v_normal;
 out vec2 v_uv;
 out vec2 v_lightmap_uv;
+out vec3 v_color;
 
 invariant gl_Position;
 
@@ -23,5 +25,6 @@ void main() {
     v_normal = u_normal_model * a_normal;
     v_uv = a_uv;
     v_lightmap_uv = a_lightmap_uv;
+    v_color = a_color.rgb;
     gl_Position = u_view_proj * world;
 }

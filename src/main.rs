@@ -23,6 +23,8 @@ enum Command {
     Render(commands::render::Args),
     /// List every option: key, type, default (the paper's choice) and meaning.
     Options(commands::options::Args),
+    /// Print what a Quake 3 map holds, as JSON.
+    Inspect(commands::inspect::Args),
 }
 
 fn main() {
@@ -34,6 +36,7 @@ fn main() {
         Command::Info(a) => commands::info::run(&cli.common, &a),
         Command::Render(a) => commands::render::run(&cli.common, &a),
         Command::Options(a) => commands::options::run(&a),
+        Command::Inspect(a) => commands::inspect::run(&cli.common, &a),
     };
     if let Err(e) = result {
         eprintln!("error: {e:#}");

@@ -302,10 +302,36 @@ define_options! {
         only: String = "all".to_string();
         /// Brightness of the unlit pass where a surface has no lightmap (built-in scene, paper 2.4).
         ambient: f32 = 0.2, in 0.0 ..= 4.0;
+        /// Use maps' lightmaps and vertex light in the unlit pass; off draws every surface at the
+        /// constant ambient level (a debug view for dark maps).
+        baked: bool = true;
         /// Constant light level of MD3 models in the unlit pass (paper 2.5: "constant, moderate").
         model_ambient: f32 = 0.5, in 0.0 ..= 4.0;
         /// Multiplier on every dynamic light's colour.
         intensity: f32 = 1.0, in 0.0 ..= 16.0;
+    }
+
+    /// Surface culling of the base renderer (paper 2.2: the PVS and frustum tests are its only
+    /// culling).
+    group culling: CullingOptions {
+        /// Skip BSP leaves outside the camera cluster's potentially visible set.
+        pvs: bool = true;
+        /// Skip BSP nodes and leaves whose boxes miss the view frustum.
+        frustum: bool = true;
+    }
+
+    /// Loading Quake 3 maps and models (applied when a scene is loaded).
+    group q3: Q3Options {
+        /// Quads per side of each 3x3 Bezier patch segment, tessellated once at load (paper 2.3).
+        patch_level: u32 = 8, in 1 ..= 64;
+        /// Also load the movable brush models (doors, lifts); the paper renders world model 0 only.
+        brush_models: bool = false;
+        /// Quake 3's r_overBrightBits: the unlit pass multiplies lightmaps by 2^bits.
+        overbright_bits: u32 = 1, in 0 ..= 2;
+        /// Quake 3's r_mapOverBrightBits: lightmaps are brightened by 2^(map bits - bits) at load.
+        map_overbright_bits: u32 = 2, in 0 ..= 4;
+        /// Show a progress bar while textures load (on a terminal only).
+        progress: bool = true;
     }
 }
 

@@ -1,6 +1,6 @@
 //! `shadowlab info`: the context path taken, the capability probe and the fallbacks chosen.
 
-use super::{CommonArgs, load_scene, start_gl};
+use super::{CommonArgs, start_gl};
 use anyhow::Result;
 use serde_json::json;
 
@@ -12,7 +12,7 @@ pub struct Args {
 }
 
 pub fn run(common: &CommonArgs, args: &Args) -> Result<()> {
-    let options = common.options_for(&load_scene(None)?)?;
+    let options = common.options_for(&shadowlab::scene::builtin::default_scene())?;
     let (ctx, renderer) = start_gl(&options)?;
     let caps = &renderer.caps;
     let skipped: Vec<String> = ctx

@@ -1,12 +1,14 @@
 //! Subcommands and what they share: option assembly, scene loading, context creation.
 
 pub mod info;
+pub mod inspect;
 pub mod options;
 pub mod render;
 
-use anyhow::{Context, Result, bail};
+use anyhow::{Context, Result};
 use shadowlab::gl::{GlContext, Renderer, create_context};
 use shadowlab::options::{BackendChoice, OptionValue, Options};
+use shadowlab::scene::file::{LoadReport, SceneFile};
 use shadowlab::scene::{Scene, builtin};
 
 /// Arguments every command accepts.
@@ -39,12 +41,20 @@ pub fn parse_size(s: &str) -> Result<(u32, u32)> {
     Ok((w, h))
 }
 
+/// Defaults, then a scene's `[options]`, then the command line (which wins).
+pub fn scene_options(common: &CommonArgs, table: &toml::Table) -> Result<Options> {
+    let mut o = Options::default();
+    o.apply_toml(table).context("in the scene's [options]")?;
+    common.apply(o)
+}
+
 impl CommonArgs {
     /// Defaults, then the scene's `[options]`, then the command line (which wins).
     pub fn options_for(&self, scene: &Scene) -> Result<Options> {
-        let mut o = Options::default();
-        o.apply_toml(&scene.options)
-            .context("in the scene's [options]")?;
+        scene_options(self, &scene.options)
+    }
+
+    fn apply(&self, mut o: Options) -> Result<Options> {
         for s in &self.sets {
             o.set_assignment(s).context("in --set")?;
         }
@@ -62,14 +72,35 @@ impl CommonArgs {
     }
 }
 
+/// A scene ready to render, the options that apply to it, and what loading reported.
+pub struct Loaded {
+    pub scene: Scene,
+    pub options: Options,
+    pub report: LoadReport,
+}
+
 /// The scene a command works on: the built-in one unless a file is given.
-pub fn load_scene(path: Option<&std::path::Path>) -> Result<Scene> {
+pub fn load(common: &CommonArgs, path: Option<&std::path::Path>) -> Result<Loaded> {
     match path {
-        None => Ok(builtin::default_scene()),
-        Some(p) => bail!(
-            "cannot load {}: scene files are not supported yet",
-            p.display()
-        ),
+        None => {
+            let scene = builtin::default_scene();
+            let options = common.options_for(&scene)?;
+            Ok(Loaded {
+                scene,
+                options,
+                report: LoadReport::default(),
+            })
+        }
+        Some(p) => {
+            let file = SceneFile::read(p)?;
+            let options = scene_options(common, &file.options)?;
+            let (scene, report) = file.build(&options)?;
+            Ok(Loaded {
+                scene,
+                options,
+                report,
+            })
+        }
     }
 }
 

@@ -1,6 +1,6 @@
 //! `shadowlab render`: one frame, headless, to a PNG.
 
-use super::{CommonArgs, load_scene, start_gl};
+use super::{CommonArgs, load, start_gl};
 use anyhow::{Context, Result};
 use std::path::PathBuf;
 
@@ -15,8 +15,11 @@ pub struct Args {
 }
 
 pub fn run(common: &CommonArgs, args: &Args) -> Result<()> {
-    let scene = load_scene(args.scene.as_deref())?;
-    let options = common.options_for(&scene)?;
+    let super::Loaded {
+        scene,
+        options,
+        report,
+    } = load(common, args.scene.as_deref())?;
     let (mut ctx, mut renderer) = start_gl(&options)?;
     renderer.load_scene(&scene)?;
     let frame = renderer.render(&scene, &options)?;
@@ -29,17 +32,36 @@ pub fn run(common: &CommonArgs, args: &Args) -> Result<()> {
     frame
         .save_png(&args.out)
         .with_context(|| format!("cannot write {}", args.out.display()))?;
-    let passes: Vec<String> = frame
-        .passes
+    // Per-light passes are summed so that 64 lights still give one readable line.
+    let mut totals: Vec<(String, f64, usize)> = Vec::new();
+    for p in &frame.passes {
+        let stage = match p.name.split_once('.') {
+            Some((light, stage)) if light.starts_with("light") => format!("lights.{stage}"),
+            _ => p.name.clone(),
+        };
+        match totals.iter_mut().find(|(n, _, _)| *n == stage) {
+            Some(t) => {
+                t.1 += p.ms;
+                t.2 += 1;
+            }
+            None => totals.push((stage, p.ms, 1)),
+        }
+    }
+    let passes: Vec<String> = totals
         .iter()
-        .map(|p| format!("{} {:.2} ms", p.name, p.ms))
+        .map(|(n, ms, count)| match count {
+            1 => format!("{n} {ms:.1} ms"),
+            _ => format!("{n} {ms:.1} ms over {count}"),
+        })
         .collect();
     eprintln!(
-        "wrote {} ({}x{}, {} path, frame {:.1} ms: {})",
+        "wrote {} ({}x{}, {} path, scene {} loaded in {:.0} ms, frame {:.1} ms: {})",
         args.out.display(),
         frame.width,
         frame.height,
         ctx.backend,
+        scene.name,
+        report.load_ms,
         frame.frame_ms,
         passes.join(", ")
     );

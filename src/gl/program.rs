@@ -98,7 +98,7 @@ impl Program {
                 gl.attach_shader(program, fs);
             }
             // Fixed attribute slots: every mesh uses the same vertex layout (gl/upload.rs).
-            for (i, a) in ["a_position", "a_normal", "a_uv", "a_lightmap_uv"]
+            for (i, a) in ["a_position", "a_normal", "a_uv", "a_lightmap_uv", "a_color"]
                 .iter()
                 .enumerate()
             {

@@ -1,7 +1,7 @@
 //! The scene on the GPU: one vertex buffer, one index buffer with surfaces sorted by draw state,
 //! textures and lightmaps. Built once per scene.
 
-use crate::scene::{Image, Scene, SurfaceOwner, Vertex};
+use crate::scene::{BakedLight, Image, Scene, SurfaceOwner, Vertex};
 use glow::HasContext;
 
 /// A run of indices drawn with one state.
@@ -11,6 +11,7 @@ pub struct DrawItem {
     pub index_count: u32,
     pub material: usize,
     pub lightmap: Option<usize>,
+    pub baked: BakedLight,
     pub owner: SurfaceOwner,
 }
 
@@ -29,7 +30,7 @@ pub struct GpuScene {
     pub index_count: usize,
 }
 
-fn state_key(scene: &Scene, s: usize) -> (u8, usize, usize, usize) {
+fn state_key(scene: &Scene, s: usize) -> (u8, usize, usize, usize, u8) {
     let surf = &scene.surfaces[s];
     let owner = match surf.owner {
         SurfaceOwner::World => (0, 0),
@@ -40,6 +41,7 @@ fn state_key(scene: &Scene, s: usize) -> (u8, usize, usize, usize) {
         owner.1,
         surf.material,
         surf.lightmap.map_or(0, |l| l + 1),
+        surf.baked as u8,
     )
 }
 
@@ -142,6 +144,8 @@ impl GpuScene {
                 gl.enable_vertex_attrib_array(loc);
                 gl.vertex_attrib_pointer_f32(loc, size, glow::FLOAT, false, stride, offset);
             }
+            gl.enable_vertex_attrib_array(4);
+            gl.vertex_attrib_pointer_f32(4, 4, glow::UNSIGNED_BYTE, true, stride, 40);
             let ibo = gl.create_buffer()?;
             gl.bind_buffer(glow::ELEMENT_ARRAY_BUFFER, Some(ibo));
             let ibytes = std::slice::from_raw_parts(
@@ -187,6 +191,7 @@ impl GpuScene {
             if let Some(last) = items.last_mut()
                 && last.material == surf.material
                 && last.lightmap == surf.lightmap
+                && last.baked == surf.baked
                 && last.owner == surf.owner
                 && last.first_index + last.index_count == first
             {
@@ -198,6 +203,7 @@ impl GpuScene {
                 index_count: surf.index_count,
                 material: surf.material,
                 lightmap: surf.lightmap,
+                baked: surf.baked,
                 owner: surf.owner,
             });
         }

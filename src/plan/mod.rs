@@ -2,10 +2,15 @@
 //!
 //! The GL layer executes a [`Plan`] and decides nothing about *what* to draw.
 
+pub mod frustum;
+
 use crate::options::Options;
-use crate::scene::Scene;
+use crate::q3::vis::VisStats;
+use crate::scene::{Scene, SurfaceOwner};
 use crate::shadow::projection;
+use frustum::Frustum;
 use glam::{Mat3, Mat4, Vec3};
+use serde::Serialize;
 
 /// The camera as the passes use it.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -43,6 +48,16 @@ pub struct LightPlan {
     pub light: usize,
 }
 
+/// What the plan decided, for stats overlays and bench JSON.
+#[derive(Debug, Clone, Default, PartialEq, Serialize)]
+pub struct PlanStats {
+    pub surfaces: usize,
+    pub surfaces_visible: usize,
+    pub triangles_visible: usize,
+    /// BSP visibility of Quake 3 worlds.
+    pub vis: Option<VisStats>,
+}
+
 /// Everything the passes need to know for one frame.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Plan {
@@ -50,16 +65,45 @@ pub struct Plan {
     /// Per surface: drawn in camera passes.
     pub visible: Vec<bool>,
     pub lights: Vec<LightPlan>,
+    pub stats: PlanStats,
 }
 
 impl Plan {
     pub fn build(scene: &Scene, options: &Options) -> Plan {
         let camera = CameraSetup::new(scene, options.width, options.height);
-        let visible = scene
-            .surfaces
-            .iter()
-            .map(|s| scene.materials[s.material].visible)
-            .collect();
+        let frustum = options
+            .culling
+            .frustum
+            .then(|| Frustum::from_view_proj(&camera.view_proj));
+        let mut visible = vec![false; scene.surfaces.len()];
+        let mut stats = PlanStats {
+            surfaces: scene.surfaces.len(),
+            ..PlanStats::default()
+        };
+        match &scene.world {
+            // Quake 3 worlds: the PVS and frustum tests of the paper's base renderer.
+            Some(world) => {
+                stats.vis = Some(world.mark_visible(
+                    camera.position,
+                    frustum.as_ref(),
+                    options.culling.pvs,
+                    &mut visible,
+                ));
+            }
+            None => visible.iter_mut().for_each(|v| *v = true),
+        }
+        for (i, s) in scene.surfaces.iter().enumerate() {
+            if let SurfaceOwner::Model(_) = s.owner {
+                visible[i] = frustum
+                    .as_ref()
+                    .is_none_or(|f| f.intersects_aabb(&s.bounds));
+            }
+            visible[i] &= scene.materials[s.material].visible;
+            if visible[i] {
+                stats.surfaces_visible += 1;
+                stats.triangles_visible += s.index_count as usize / 3;
+            }
+        }
         let lights = (0..scene.lights.len())
             .filter(|&i| options.light_enabled(i))
             .map(|light| LightPlan { light })
@@ -68,6 +112,7 @@ impl Plan {
             camera,
             visible,
             lights,
+            stats,
         }
     }
 }

@@ -6,6 +6,7 @@
 
 pub mod builtin;
 pub mod camera;
+pub mod file;
 pub mod light;
 pub mod shapes;
 
@@ -24,6 +25,8 @@ pub struct Vertex {
     pub uv: [f32; 2],
     /// Texture coordinates in the surface's lightmap (unused without one).
     pub lightmap_uv: [f32; 2],
+    /// Baked light of vertex-lit Quake 3 surfaces (white elsewhere).
+    pub color: [u8; 4],
 }
 
 impl Vertex {
@@ -33,6 +36,7 @@ impl Vertex {
             normal: normal.to_array(),
             uv,
             lightmap_uv: [0.0, 0.0],
+            color: [255; 4],
         }
     }
     pub fn pos(&self) -> Vec3 {
@@ -213,6 +217,18 @@ pub enum SurfaceOwner {
     Model(usize),
 }
 
+/// Where a surface's baked (unlit-pass) light comes from.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum BakedLight {
+    /// The constant ambient level (built-in scenes, models: paper 2.5).
+    #[default]
+    Constant,
+    /// A lightmap page ([`Surface::lightmap`]).
+    Lightmap,
+    /// The vertex colours (Quake 3's vertex-lit surfaces).
+    Vertex,
+}
+
 /// What kind of Quake 3 face a world surface was (built-in geometry counts as `Mesh`).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum SurfaceKind {
@@ -230,6 +246,7 @@ pub struct Surface {
     pub material: usize,
     /// Index into [`Scene::lightmaps`], if the surface has one.
     pub lightmap: Option<usize>,
+    pub baked: BakedLight,
     pub owner: SurfaceOwner,
     pub kind: SurfaceKind,
     /// World-space bounds (after the owner's transform).
@@ -259,6 +276,8 @@ pub struct Scene {
     pub camera: Camera,
     /// Option overrides the scene asks for (`[options]` of a scene file), as a TOML table.
     pub options: toml::Table,
+    /// BSP visibility of a Quake 3 world (None for built-in scenes: everything is visible).
+    pub world: Option<std::sync::Arc<crate::q3::vis::WorldVis>>,
 }
 
 impl Scene {
@@ -301,6 +320,7 @@ impl Scene {
             index_count: indices.len() as u32,
             material,
             lightmap: None,
+            baked: BakedLight::Constant,
             owner,
             kind,
             bounds: local.transformed(&transform),

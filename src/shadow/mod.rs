@@ -1,3 +1,4 @@
-//! Shadow algorithms' CPU side: projections and light frusta (more arrives with each technique).
+//! Shadow algorithms' CPU side: edge connectivity, projections and light frusta.
 
+pub mod edges;
 pub mod projection;

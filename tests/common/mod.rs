@@ -57,3 +57,26 @@ pub fn mean_luma(f: &Frame, (x, y): (u32, u32), radius: u32) -> f32 {
     }
     sum / n
 }
+
+/// The OpenArena data folder; fails with the fetch command when the data is absent.
+pub fn openarena_data() -> std::path::PathBuf {
+    let dir = shadowlab::q3::pk3::data_dir();
+    if let Err(e) = shadowlab::q3::pk3::Vfs::open_data_dir(&dir) {
+        panic!("{e}\nThis test needs OpenArena's data: run `scripts/fetch-openarena.sh` first.");
+    }
+    dir
+}
+
+/// Loads a scene file from `assets/scenes/` with default options (no progress bar).
+pub fn load_scene_file(name: &str) -> (Scene, shadowlab::scene::file::LoadReport, Options) {
+    openarena_data();
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("assets/scenes")
+        .join(format!("{name}.toml"));
+    let file = shadowlab::scene::file::SceneFile::read(&path).unwrap_or_else(|e| panic!("{e}"));
+    let mut options = Options::default();
+    options.apply_toml(&file.options).unwrap();
+    options.q3.progress = false;
+    let (scene, report) = file.build(&options).unwrap_or_else(|e| panic!("{e}"));
+    (scene, report, options)
+}

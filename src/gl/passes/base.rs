@@ -2,7 +2,7 @@
 
 use super::{PassContext, draw_items};
 use crate::gl::program::Program;
-use crate::scene::SurfaceOwner;
+use crate::scene::{BakedLight, SurfaceOwner};
 use glam::Vec3;
 use glow::HasContext;
 
@@ -27,7 +27,11 @@ pub fn draw(ctx: &PassContext, program: &Program) {
     program.set_mat4(gl, "u_view_proj", &ctx.plan.camera.view_proj);
     program.set_i32(gl, "u_texture", 0);
     program.set_i32(gl, "u_lightmap", 1);
-    program.set_f32(gl, "u_lightmap_scale", 1.0);
+    program.set_f32(
+        gl,
+        "u_lightmap_scale",
+        (1u32 << ctx.options.q3.overbright_bits) as f32,
+    );
     let items = ctx.gpu.draw_list(ctx.scene, |s| ctx.plan.visible[s]);
     let lighting = &ctx.options.lighting;
     draw_items(ctx, program, &items, |item| {
@@ -39,8 +43,14 @@ pub fn draw(ctx: &PassContext, program: &Program) {
         let lightmap = item
             .lightmap
             .and_then(|l| ctx.gpu.lightmaps.get(l).copied());
-        program.set_i32(gl, "u_has_lightmap", lightmap.is_some() as i32);
-        if let Some(lm) = lightmap {
+        let baked = match (item.baked, lightmap) {
+            _ if !lighting.baked => 0,
+            (BakedLight::Lightmap, Some(_)) => 1,
+            (BakedLight::Vertex, _) => 2,
+            _ => 0,
+        };
+        program.set_i32(gl, "u_baked", baked);
+        if let (1, Some(lm)) = (baked, lightmap) {
             // SAFETY: binding a valid texture to unit 1.
             unsafe {
                 gl.active_texture(glow::TEXTURE1);

@@ -1,0 +1,1142 @@
+//! IBSP version 46, the Quake 3 map format: 17 lumps, every one validated.
+//!
+//! Validation covers the header, every lump's placement (inside the file, a multiple of its record
+//! size) and every index one record holds into another lump, so later stages can index without
+//! checks. Errors name the lump, the record and the offending value. Nothing is allocated beyond
+//! what the lump sizes imply, so a hostile header cannot request more memory than the file holds.
+//! Node children must come after their parent (q3map writes nodes in pre-order), which makes every
+//! tree walk finite.
+//!
+//! One defect of shipped maps is repaired instead of rejected and reported in `Bsp::warnings`:
+//! a surface's fog number outside the fogs lump (shadowlab draws no fog).
+
+use thiserror::Error;
+
+pub const LUMP_NAMES: [&str; 17] = [
+    "entities",
+    "shaders",
+    "planes",
+    "nodes",
+    "leafs",
+    "leafsurfaces",
+    "leafbrushes",
+    "models",
+    "brushes",
+    "brushsides",
+    "drawverts",
+    "drawindexes",
+    "fogs",
+    "surfaces",
+    "lightmaps",
+    "lightgrid",
+    "visibility",
+];
+const RECORD_SIZES: [usize; 17] = [
+    1, 72, 16, 36, 48, 4, 4, 40, 12, 8, 44, 4, 72, 104, 49152, 8, 1,
+];
+const HEADER_BYTES: usize = 8 + 17 * 8;
+/// Side of a lightmap page in texels.
+pub const LIGHTMAP_SIDE: usize = 128;
+
+#[derive(Debug, Error, PartialEq)]
+pub enum BspError {
+    #[error("file is {0} bytes, smaller than the {HEADER_BYTES}-byte header")]
+    TooSmall(usize),
+    #[error("magic is {0:?}, not \"IBSP\"")]
+    BadMagic([u8; 4]),
+    #[error("version {0}, only 46 (Quake 3) is supported")]
+    BadVersion(i32),
+    #[error("lump {lump}: offset {offset} length {length} is outside the {file_len}-byte file")]
+    LumpOutOfFile {
+        lump: &'static str,
+        offset: i64,
+        length: i64,
+        file_len: usize,
+    },
+    #[error("lump {lump}: length {length} is not a multiple of its {record}-byte record")]
+    LumpNotMultiple {
+        lump: &'static str,
+        length: usize,
+        record: usize,
+    },
+    #[error("lump {lump}, record {record}: {field} = {value} is out of range (0..{limit})")]
+    IndexOutOfRange {
+        lump: &'static str,
+        record: usize,
+        field: &'static str,
+        value: i64,
+        limit: i64,
+    },
+    #[error("lump {lump}, record {record}: {field} = {value} is invalid: {why}")]
+    Invalid {
+        lump: &'static str,
+        record: usize,
+        field: &'static str,
+        value: i64,
+        why: &'static str,
+    },
+    #[error("lump {lump}, record {record}: {field} is not a finite number")]
+    NotFinite {
+        lump: &'static str,
+        record: usize,
+        field: &'static str,
+    },
+}
+
+#[derive(Debug, Clone, PartialEq)]
+pub struct BspShader {
+    pub name: String,
+    pub surface_flags: i32,
+    pub content_flags: i32,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Plane {
+    pub normal: [f32; 3],
+    pub dist: f32,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Node {
+    pub plane: u32,
+    /// ≥ 0: a node; < 0: leaf `-(child + 1)`.
+    pub children: [i32; 2],
+    pub mins: [i32; 3],
+    pub maxs: [i32; 3],
+}
+
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Leaf {
+    /// -1: outside the map (solid or void).
+    pub cluster: i32,
+    pub area: i32,
+    pub mins: [i32; 3],
+    pub maxs: [i32; 3],
+    pub first_leaf_surface: u32,
+    pub num_leaf_surfaces: u32,
+    pub first_leaf_brush: u32,
+    pub num_leaf_brushes: u32,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Model {
+    pub mins: [f32; 3],
+    pub maxs: [f32; 3],
+    pub first_surface: u32,
+    pub num_surfaces: u32,
+    pub first_brush: u32,
+    pub num_brushes: u32,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Brush {
+    pub first_side: u32,
+    pub num_sides: u32,
+    pub shader: u32,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct BrushSide {
+    pub plane: u32,
+    pub shader: u32,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct DrawVert {
+    pub position: [f32; 3],
+    pub st: [f32; 2],
+    pub lightmap: [f32; 2],
+    pub normal: [f32; 3],
+    pub color: [u8; 4],
+}
+
+#[derive(Debug, Clone, PartialEq)]
+pub struct Fog {
+    pub name: String,
+    pub brush: i32,
+    pub visible_side: i32,
+}
+
+/// Quake 3's four face types.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum SurfaceType {
+    Planar,
+    Patch,
+    TriangleSoup,
+    Flare,
+}
+
+#[derive(Debug, Clone, PartialEq)]
+pub struct Surface {
+    pub shader: u32,
+    /// -1: no fog.
+    pub fog: i32,
+    pub kind: SurfaceType,
+    pub first_vert: u32,
+    pub num_verts: u32,
+    pub first_index: u32,
+    pub num_indexes: u32,
+    /// < 0: no lightmap (vertex lit or fullbright).
+    pub lightmap: i32,
+    pub lightmap_origin: [f32; 3],
+    pub lightmap_vecs: [[f32; 3]; 3],
+    pub patch_width: u32,
+    pub patch_height: u32,
+}
+
+impl Surface {
+    pub fn lightmap_index(&self) -> Option<usize> {
+        (self.lightmap >= 0).then_some(self.lightmap as usize)
+    }
+}
+
+/// The potentially visible set: one bit row per cluster.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Vis {
+    pub num_clusters: u32,
+    pub cluster_bytes: u32,
+    pub data: Vec<u8>,
+}
+
+impl Vis {
+    /// Whether `to` may be seen from `from`. Clusters outside the table (e.g. -1) see nothing.
+    pub fn visible(&self, from: i32, to: i32) -> bool {
+        if from < 0 || to < 0 || from as u32 >= self.num_clusters || to as u32 >= self.num_clusters
+        {
+            return false;
+        }
+        let row = from as usize * self.cluster_bytes as usize;
+        self.data[row + (to as usize >> 3)] & (1 << (to & 7)) != 0
+    }
+}
+
+#[derive(Debug, Clone, PartialEq)]
+pub struct Bsp {
+    pub entities: String,
+    pub shaders: Vec<BspShader>,
+    pub planes: Vec<Plane>,
+    pub nodes: Vec<Node>,
+    pub leafs: Vec<Leaf>,
+    pub leaf_surfaces: Vec<u32>,
+    pub leaf_brushes: Vec<u32>,
+    pub models: Vec<Model>,
+    pub brushes: Vec<Brush>,
+    pub brush_sides: Vec<BrushSide>,
+    pub vertices: Vec<DrawVert>,
+    pub indexes: Vec<u32>,
+    pub fogs: Vec<Fog>,
+    pub surfaces: Vec<Surface>,
+    /// RGB pages of LIGHTMAP_SIDE² texels.
+    pub lightmaps: Vec<Vec<u8>>,
+    pub light_grid: Vec<[u8; 8]>,
+    /// Absent when the map was compiled without vis.
+    pub vis: Option<Vis>,
+    /// Defects repaired instead of rejected, each a documented fallback (see [`parse`]).
+    pub warnings: Vec<String>,
+}
+
+fn i32_at(d: &[u8], off: usize) -> i32 {
+    i32::from_le_bytes([d[off], d[off + 1], d[off + 2], d[off + 3]])
+}
+fn f32_at(d: &[u8], off: usize) -> f32 {
+    f32::from_le_bytes([d[off], d[off + 1], d[off + 2], d[off + 3]])
+}
+fn name_at(d: &[u8], off: usize, len: usize) -> String {
+    let raw = &d[off..off + len];
+    let end = raw.iter().position(|&b| b == 0).unwrap_or(len);
+    String::from_utf8_lossy(&raw[..end]).into_owned()
+}
+
+/// A lump's bytes and its record count.
+struct Lump<'a> {
+    id: usize,
+    data: &'a [u8],
+}
+
+impl<'a> Lump<'a> {
+    fn count(&self) -> usize {
+        self.data.len() / RECORD_SIZES[self.id]
+    }
+    fn record(&self, i: usize) -> &'a [u8] {
+        let r = RECORD_SIZES[self.id];
+        &self.data[i * r..(i + 1) * r]
+    }
+    /// Parses every record with `f`.
+    fn parse<T>(
+        &self,
+        mut f: impl FnMut(usize, &[u8]) -> Result<T, BspError>,
+    ) -> Result<Vec<T>, BspError> {
+        let mut v = Vec::with_capacity(self.count());
+        for i in 0..self.count() {
+            v.push(f(i, self.record(i))?);
+        }
+        Ok(v)
+    }
+}
+
+fn range_err(
+    lump: &'static str,
+    record: usize,
+    field: &'static str,
+    value: i64,
+    limit: usize,
+) -> BspError {
+    BspError::IndexOutOfRange {
+        lump,
+        record,
+        field,
+        value,
+        limit: limit as i64,
+    }
+}
+
+/// `value` in 0..limit.
+fn index(
+    lump: &'static str,
+    record: usize,
+    field: &'static str,
+    value: i32,
+    limit: usize,
+) -> Result<u32, BspError> {
+    if value < 0 || value as i64 >= limit as i64 {
+        return Err(range_err(lump, record, field, value as i64, limit));
+    }
+    Ok(value as u32)
+}
+
+/// `first..first + count` inside 0..limit.
+fn span(
+    lump: &'static str,
+    record: usize,
+    field: &'static str,
+    first: i32,
+    count: i32,
+    limit: usize,
+) -> Result<(u32, u32), BspError> {
+    if first < 0 || first as i64 > limit as i64 {
+        return Err(range_err(lump, record, field, first as i64, limit + 1));
+    }
+    if count < 0 || first as i64 + count as i64 > limit as i64 {
+        return Err(BspError::IndexOutOfRange {
+            lump,
+            record,
+            field,
+            value: first as i64 + count as i64,
+            limit: limit as i64 + 1,
+        });
+    }
+    Ok((first as u32, count as u32))
+}
+
+fn finite(
+    lump: &'static str,
+    record: usize,
+    field: &'static str,
+    v: &[f32],
+) -> Result<(), BspError> {
+    if v.iter().all(|x| x.is_finite()) {
+        Ok(())
+    } else {
+        Err(BspError::NotFinite {
+            lump,
+            record,
+            field,
+        })
+    }
+}
+
+fn vec3(d: &[u8], off: usize) -> [f32; 3] {
+    [f32_at(d, off), f32_at(d, off + 4), f32_at(d, off + 8)]
+}
+fn ivec3(d: &[u8], off: usize) -> [i32; 3] {
+    [i32_at(d, off), i32_at(d, off + 4), i32_at(d, off + 8)]
+}
+
+/// Parses and validates a whole IBSP v46 file.
+pub fn parse(file: &[u8]) -> Result<Bsp, BspError> {
+    if file.len() < HEADER_BYTES {
+        return Err(BspError::TooSmall(file.len()));
+    }
+    let magic = [file[0], file[1], file[2], file[3]];
+    if &magic != b"IBSP" {
+        return Err(BspError::BadMagic(magic));
+    }
+    let version = i32_at(file, 4);
+    if version != 46 {
+        return Err(BspError::BadVersion(version));
+    }
+    let mut lumps = Vec::with_capacity(17);
+    for id in 0..17 {
+        let offset = i32_at(file, 8 + id * 8) as i64;
+        let length = i32_at(file, 12 + id * 8) as i64;
+        if offset < 0 || length < 0 || offset + length > file.len() as i64 {
+            return Err(BspError::LumpOutOfFile {
+                lump: LUMP_NAMES[id],
+                offset,
+                length,
+                file_len: file.len(),
+            });
+        }
+        let (o, l) = (offset as usize, length as usize);
+        if l % RECORD_SIZES[id] != 0 {
+            return Err(BspError::LumpNotMultiple {
+                lump: LUMP_NAMES[id],
+                length: l,
+                record: RECORD_SIZES[id],
+            });
+        }
+        lumps.push(Lump {
+            id,
+            data: &file[o..o + l],
+        });
+    }
+    let count = |id: usize| lumps[id].count();
+    let (n_shaders, n_planes, n_nodes, n_leafs) = (count(1), count(2), count(3), count(4));
+    let (n_leaf_surfaces, n_leaf_brushes, n_brushes, n_sides) =
+        (count(5), count(6), count(8), count(9));
+    let (n_verts, n_indexes, n_fogs, n_surfaces, n_lightmaps) =
+        (count(10), count(11), count(12), count(13), count(14));
+
+    let entities = {
+        let d = lumps[0].data;
+        let end = d.iter().position(|&b| b == 0).unwrap_or(d.len());
+        String::from_utf8_lossy(&d[..end]).into_owned()
+    };
+    let shaders = lumps[1].parse(|_, r| {
+        Ok(BspShader {
+            name: name_at(r, 0, 64),
+            surface_flags: i32_at(r, 64),
+            content_flags: i32_at(r, 68),
+        })
+    })?;
+    let planes = lumps[2].parse(|i, r| {
+        let p = Plane {
+            normal: vec3(r, 0),
+            dist: f32_at(r, 12),
+        };
+        finite(
+            "planes",
+            i,
+            "normal/dist",
+            &[p.normal[0], p.normal[1], p.normal[2], p.dist],
+        )?;
+        Ok(p)
+    })?;
+    let nodes = lumps[3].parse(|i, r| {
+        let plane = index("nodes", i, "plane", i32_at(r, 0), n_planes)?;
+        let children = [i32_at(r, 4), i32_at(r, 8)];
+        for (c, field) in children.iter().zip(["children[0]", "children[1]"]) {
+            if *c >= 0 {
+                index("nodes", i, field, *c, n_nodes)?;
+                if *c as usize <= i {
+                    return Err(BspError::Invalid {
+                        lump: "nodes",
+                        record: i,
+                        field,
+                        value: *c as i64,
+                        why: "a child node must come after its parent",
+                    });
+                }
+            } else {
+                index("nodes", i, field, -(c + 1), n_leafs)?;
+            }
+        }
+        Ok(Node {
+            plane,
+            children,
+            mins: ivec3(r, 12),
+            maxs: ivec3(r, 24),
+        })
+    })?;
+
+    // Visibility comes before leafs so their clusters can be checked against it.
+    let vis = {
+        let d = lumps[16].data;
+        if d.is_empty() {
+            None
+        } else {
+            if d.len() < 8 {
+                return Err(BspError::Invalid {
+                    lump: "visibility",
+                    record: 0,
+                    field: "length",
+                    value: d.len() as i64,
+                    why: "shorter than its 8-byte header",
+                });
+            }
+            let (nc, cb) = (i32_at(d, 0), i32_at(d, 4));
+            if nc < 0 {
+                return Err(BspError::Invalid {
+                    lump: "visibility",
+                    record: 0,
+                    field: "numClusters",
+                    value: nc as i64,
+                    why: "negative",
+                });
+            }
+            if (cb as i64) < (nc as i64 + 7) / 8 {
+                return Err(BspError::Invalid {
+                    lump: "visibility",
+                    record: 0,
+                    field: "clusterBytes",
+                    value: cb as i64,
+                    why: "too small for one bit per cluster",
+                });
+            }
+            let needed = 8 + nc as u64 * cb as u64;
+            if needed > d.len() as u64 {
+                return Err(BspError::Invalid {
+                    lump: "visibility",
+                    record: 0,
+                    field: "numClusters*clusterBytes",
+                    value: needed as i64,
+                    why: "more than the lump holds",
+                });
+            }
+            Some(Vis {
+                num_clusters: nc as u32,
+                cluster_bytes: cb as u32,
+                data: d[8..needed as usize].to_vec(),
+            })
+        }
+    };
+    let n_clusters = vis.as_ref().map(|v| v.num_clusters as usize);
+
+    let leafs = lumps[4].parse(|i, r| {
+        let cluster = i32_at(r, 0);
+        match n_clusters {
+            Some(n) if cluster >= 0 => {
+                index("leafs", i, "cluster", cluster, n)?;
+            }
+            _ if cluster < -1 => {
+                return Err(range_err(
+                    "leafs",
+                    i,
+                    "cluster",
+                    cluster as i64,
+                    n_clusters.unwrap_or(0),
+                ));
+            }
+            _ => {}
+        }
+        let (fs, ns) = span(
+            "leafs",
+            i,
+            "firstLeafSurface/numLeafSurfaces",
+            i32_at(r, 32),
+            i32_at(r, 36),
+            n_leaf_surfaces,
+        )?;
+        let (fb, nb) = span(
+            "leafs",
+            i,
+            "firstLeafBrush/numLeafBrushes",
+            i32_at(r, 40),
+            i32_at(r, 44),
+            n_leaf_brushes,
+        )?;
+        Ok(Leaf {
+            cluster,
+            area: i32_at(r, 4),
+            mins: ivec3(r, 8),
+            maxs: ivec3(r, 20),
+            first_leaf_surface: fs,
+            num_leaf_surfaces: ns,
+            first_leaf_brush: fb,
+            num_leaf_brushes: nb,
+        })
+    })?;
+    let leaf_surfaces =
+        lumps[5].parse(|i, r| index("leafsurfaces", i, "surface", i32_at(r, 0), n_surfaces))?;
+    let leaf_brushes =
+        lumps[6].parse(|i, r| index("leafbrushes", i, "brush", i32_at(r, 0), n_brushes))?;
+    let models = lumps[7].parse(|i, r| {
+        let (mins, maxs) = (vec3(r, 0), vec3(r, 12));
+        finite("models", i, "mins/maxs", &[mins, maxs].concat())?;
+        let (fs, ns) = span(
+            "models",
+            i,
+            "firstSurface/numSurfaces",
+            i32_at(r, 24),
+            i32_at(r, 28),
+            n_surfaces,
+        )?;
+        let (fb, nb) = span(
+            "models",
+            i,
+            "firstBrush/numBrushes",
+            i32_at(r, 32),
+            i32_at(r, 36),
+            n_brushes,
+        )?;
+        Ok(Model {
+            mins,
+            maxs,
+            first_surface: fs,
+            num_surfaces: ns,
+            first_brush: fb,
+            num_brushes: nb,
+        })
+    })?;
+    let brushes = lumps[8].parse(|i, r| {
+        let (first_side, num_sides) = span(
+            "brushes",
+            i,
+            "firstSide/numSides",
+            i32_at(r, 0),
+            i32_at(r, 4),
+            n_sides,
+        )?;
+        Ok(Brush {
+            first_side,
+            num_sides,
+            shader: index("brushes", i, "shader", i32_at(r, 8), n_shaders)?,
+        })
+    })?;
+    let brush_sides = lumps[9].parse(|i, r| {
+        Ok(BrushSide {
+            plane: index("brushsides", i, "plane", i32_at(r, 0), n_planes)?,
+            shader: index("brushsides", i, "shader", i32_at(r, 4), n_shaders)?,
+        })
+    })?;
+    let vertices = lumps[10].parse(|i, r| {
+        let v = DrawVert {
+            position: vec3(r, 0),
+            st: [f32_at(r, 12), f32_at(r, 16)],
+            lightmap: [f32_at(r, 20), f32_at(r, 24)],
+            normal: vec3(r, 28),
+            color: [r[40], r[41], r[42], r[43]],
+        };
+        finite("drawverts", i, "position", &v.position)?;
+        // Texture coordinates and normals of unused vertices may be garbage in real maps; they
+        // are sanitised where surfaces use them, not rejected.
+        Ok(v)
+    })?;
+    let indexes = lumps[11].parse(|i, r| {
+        let v = i32_at(r, 0);
+        if v < 0 {
+            return Err(range_err("drawindexes", i, "index", v as i64, n_verts));
+        }
+        Ok(v as u32)
+    })?;
+    let fogs = lumps[12].parse(|i, r| {
+        let brush = i32_at(r, 64);
+        if brush >= 0 {
+            index("fogs", i, "brushNum", brush, n_brushes)?;
+        }
+        Ok(Fog {
+            name: name_at(r, 0, 64),
+            brush,
+            visible_side: i32_at(r, 68),
+        })
+    })?;
+    let mut warnings = Vec::new();
+    let mut bad_fogs = 0usize;
+    let surfaces = lumps[13].parse(|i, r| {
+        let lump = "surfaces";
+        let shader = index(lump, i, "shaderNum", i32_at(r, 0), n_shaders)?;
+        let mut fog = i32_at(r, 4);
+        if fog < -1 || fog as i64 >= n_fogs as i64 {
+            // Fallback: shipped maps (OpenArena's aggressor) reference fogs they lack; shadowlab
+            // draws no fog, so the reference is cleared and reported instead of rejecting the map.
+            bad_fogs += 1;
+            fog = -1;
+        }
+        let kind = match i32_at(r, 8) {
+            1 => SurfaceType::Planar,
+            2 => SurfaceType::Patch,
+            3 => SurfaceType::TriangleSoup,
+            4 => SurfaceType::Flare,
+            other => {
+                return Err(BspError::Invalid {
+                    lump,
+                    record: i,
+                    field: "surfaceType",
+                    value: other as i64,
+                    why: "not 1 (planar), 2 (patch), 3 (triangle soup) or 4 (flare)",
+                });
+            }
+        };
+        let (first_vert, num_verts) = span(
+            lump,
+            i,
+            "firstVert/numVerts",
+            i32_at(r, 12),
+            i32_at(r, 16),
+            n_verts,
+        )?;
+        let (first_index, num_indexes) = span(
+            lump,
+            i,
+            "firstIndex/numIndexes",
+            i32_at(r, 20),
+            i32_at(r, 24),
+            n_indexes,
+        )?;
+        let lightmap = i32_at(r, 28);
+        if lightmap >= 0 {
+            index(lump, i, "lightmapNum", lightmap, n_lightmaps)?;
+        }
+        let (pw, ph) = (i32_at(r, 96), i32_at(r, 100));
+        let mut s = Surface {
+            shader,
+            fog,
+            kind,
+            first_vert,
+            num_verts,
+            first_index,
+            num_indexes,
+            lightmap,
+            lightmap_origin: vec3(r, 48),
+            lightmap_vecs: [vec3(r, 60), vec3(r, 72), vec3(r, 84)],
+            patch_width: 0,
+            patch_height: 0,
+        };
+        match kind {
+            SurfaceType::Patch => {
+                for (v, field) in [(pw, "patchWidth"), (ph, "patchHeight")] {
+                    if !(3..=1024).contains(&v) || v % 2 == 0 {
+                        return Err(BspError::Invalid {
+                            lump,
+                            record: i,
+                            field,
+                            value: v as i64,
+                            why: "a patch side must be odd and between 3 and 1024",
+                        });
+                    }
+                }
+                if pw as i64 * ph as i64 != num_verts as i64 {
+                    return Err(BspError::Invalid {
+                        lump,
+                        record: i,
+                        field: "patchWidth*patchHeight",
+                        value: pw as i64 * ph as i64,
+                        why: "differs from numVerts",
+                    });
+                }
+                s.patch_width = pw as u32;
+                s.patch_height = ph as u32;
+            }
+            SurfaceType::Planar | SurfaceType::TriangleSoup => {
+                if num_indexes % 3 != 0 {
+                    return Err(BspError::Invalid {
+                        lump,
+                        record: i,
+                        field: "numIndexes",
+                        value: num_indexes as i64,
+                        why: "not a multiple of 3",
+                    });
+                }
+            }
+            SurfaceType::Flare => {}
+        }
+        Ok(s)
+    })?;
+    if bad_fogs > 0 {
+        warnings.push(format!(
+            "{bad_fogs} surfaces name a fog outside the {n_fogs} fogs of the map; their fog is ignored"
+        ));
+    }
+    // Mesh indices are relative to the surface's first vertex.
+    for (i, s) in surfaces.iter().enumerate() {
+        if matches!(s.kind, SurfaceType::Planar | SurfaceType::TriangleSoup) {
+            let range = s.first_index as usize..(s.first_index + s.num_indexes) as usize;
+            if let Some(&bad) = indexes[range].iter().find(|&&v| v >= s.num_verts) {
+                return Err(range_err(
+                    "surfaces",
+                    i,
+                    "drawindex (relative to firstVert)",
+                    bad as i64,
+                    s.num_verts as usize,
+                ));
+            }
+        }
+    }
+    let lightmaps = (0..n_lightmaps)
+        .map(|i| lumps[14].record(i).to_vec())
+        .collect();
+    let light_grid = lumps[15].parse(|_, r| {
+        let mut a = [0u8; 8];
+        a.copy_from_slice(r);
+        Ok(a)
+    })?;
+
+    Ok(Bsp {
+        entities,
+        shaders,
+        planes,
+        nodes,
+        leafs,
+        leaf_surfaces,
+        leaf_brushes,
+        models,
+        brushes,
+        brush_sides,
+        vertices,
+        indexes,
+        fogs,
+        surfaces,
+        lightmaps,
+        light_grid,
+        vis,
+        warnings,
+    })
+}
+
+impl Bsp {
+    /// The leaf containing `p`, walking the node tree from the root (finite: children come after
+    /// their parents). A map without nodes has everything in leaf 0.
+    pub fn leaf_at(&self, p: [f32; 3]) -> Option<usize> {
+        if self.nodes.is_empty() {
+            return (!self.leafs.is_empty()).then_some(0);
+        }
+        let mut node = 0usize;
+        loop {
+            let n = &self.nodes[node];
+            let plane = &self.planes[n.plane as usize];
+            let d = plane.normal[0] * p[0] + plane.normal[1] * p[1] + plane.normal[2] * p[2]
+                - plane.dist;
+            let child = if d >= 0.0 {
+                n.children[0]
+            } else {
+                n.children[1]
+            };
+            if child < 0 {
+                return Some((-(child + 1)) as usize);
+            }
+            node = child as usize;
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A minimal valid map: one square face on one leaf, a second empty leaf, two clusters.
+    struct Writer {
+        lumps: Vec<Vec<u8>>,
+    }
+
+    fn i(v: i32) -> [u8; 4] {
+        v.to_le_bytes()
+    }
+    fn f(v: f32) -> [u8; 4] {
+        v.to_le_bytes()
+    }
+
+    impl Writer {
+        fn valid() -> Writer {
+            let mut l = vec![Vec::new(); 17];
+            l[0] = b"{\n\"classname\" \"worldspawn\"\n}\n\0".to_vec();
+            let mut shader = vec![0u8; 72];
+            shader[..15].copy_from_slice(b"textures/a/wall");
+            l[1] = shader;
+            l[2] = [f(0.0), f(0.0), f(1.0), f(0.0)].concat();
+            // Node 0: plane 0, front = leaf 0, back = leaf 1.
+            l[3] = [
+                i(0),
+                i(-1),
+                i(-2),
+                i(-64),
+                i(-64),
+                i(-64),
+                i(64),
+                i(64),
+                i(64),
+            ]
+            .concat();
+            l[4] = [
+                [
+                    i(0),
+                    i(0),
+                    i(-64),
+                    i(-64),
+                    i(0),
+                    i(64),
+                    i(64),
+                    i(64),
+                    i(0),
+                    i(1),
+                    i(0),
+                    i(1),
+                ]
+                .concat(),
+                [
+                    i(1),
+                    i(0),
+                    i(-64),
+                    i(-64),
+                    i(-64),
+                    i(64),
+                    i(64),
+                    i(0),
+                    i(1),
+                    i(0),
+                    i(0),
+                    i(0),
+                ]
+                .concat(),
+            ]
+            .concat();
+            l[5] = i(0).to_vec();
+            l[6] = i(0).to_vec();
+            l[7] = [
+                f(-64.0),
+                f(-64.0),
+                f(-64.0),
+                f(64.0),
+                f(64.0),
+                f(64.0),
+                i(0),
+                i(1),
+                i(0),
+                i(1),
+            ]
+            .concat();
+            l[8] = [i(0), i(1), i(0)].concat();
+            l[9] = [i(0), i(0)].concat();
+            let mut verts = Vec::new();
+            for (x, y) in [(0.0, 0.0), (10.0, 0.0), (10.0, 10.0), (0.0, 10.0)] {
+                verts.extend(
+                    [
+                        f(x),
+                        f(y),
+                        f(0.0),
+                        f(0.0),
+                        f(0.0),
+                        f(0.0),
+                        f(0.0),
+                        f(0.0),
+                        f(0.0),
+                        f(1.0),
+                    ]
+                    .concat(),
+                );
+                verts.extend([255, 255, 255, 255]);
+            }
+            l[10] = verts;
+            l[11] = [i(0), i(1), i(2), i(0), i(2), i(3)].concat();
+            let mut surf = [
+                i(0),
+                i(-1),
+                i(1),
+                i(0),
+                i(4),
+                i(0),
+                i(6),
+                i(0),
+                i(0),
+                i(0),
+                i(0),
+                i(0),
+            ]
+            .concat();
+            surf.extend(vec![0u8; 48]);
+            surf.extend([i(0), i(0)].concat());
+            l[13] = surf;
+            l[14] = vec![128u8; 49152];
+            l[15] = vec![0u8; 8];
+            // Two clusters, one byte each, each seeing both.
+            l[16] = [i(2).to_vec(), i(1).to_vec(), vec![0b11, 0b11]].concat();
+            Writer { lumps: l }
+        }
+
+        fn bytes(&self) -> Vec<u8> {
+            let mut out = b"IBSP".to_vec();
+            out.extend(i(46));
+            let mut offset = 8 + 17 * 8;
+            let mut body: Vec<u8> = Vec::new();
+            for l in &self.lumps {
+                out.extend(i(offset as i32));
+                out.extend(i(l.len() as i32));
+                body.extend(l);
+                offset += l.len();
+            }
+            out.extend(body);
+            out
+        }
+
+        /// Overwrites the i32 at `at` in lump `lump`.
+        fn set(mut self, lump: usize, at: usize, v: i32) -> Writer {
+            self.lumps[lump][at..at + 4].copy_from_slice(&i(v));
+            self
+        }
+    }
+
+    #[test]
+    fn the_minimal_map_parses_with_its_values() {
+        let b = parse(&Writer::valid().bytes()).unwrap();
+        assert_eq!(b.shaders[0].name, "textures/a/wall");
+        assert_eq!(b.surfaces.len(), 1);
+        assert_eq!(b.surfaces[0].kind, SurfaceType::Planar);
+        assert_eq!(b.indexes, vec![0, 1, 2, 0, 2, 3]);
+        assert_eq!(b.vertices[2].position, [10.0, 10.0, 0.0]);
+        assert_eq!(b.lightmaps.len(), 1);
+        let vis = b.vis.as_ref().unwrap();
+        assert!(
+            vis.visible(0, 1) && vis.visible(1, 0) && !vis.visible(0, 2) && !vis.visible(-1, 0)
+        );
+        assert_eq!(b.leaf_at([0.0, 0.0, 5.0]), Some(0));
+        assert_eq!(b.leaf_at([0.0, 0.0, -5.0]), Some(1));
+        assert!(b.warnings.is_empty());
+    }
+
+    #[test]
+    fn every_truncation_is_an_error_not_a_panic() {
+        let full = Writer::valid().bytes();
+        for len in 0..full.len() {
+            let r = parse(&full[..len]);
+            assert!(r.is_err(), "prefix of {len} bytes parsed");
+        }
+        assert_eq!(parse(&full[..10]), Err(BspError::TooSmall(10)));
+    }
+
+    #[test]
+    fn header_errors() {
+        let mut b = Writer::valid().bytes();
+        b[0] = b'X';
+        assert!(matches!(parse(&b), Err(BspError::BadMagic(_))));
+        let mut b = Writer::valid().bytes();
+        b[4..8].copy_from_slice(&i(47));
+        assert_eq!(parse(&b), Err(BspError::BadVersion(47)));
+        // Lump 13 (surfaces) pointing past the end of the file.
+        let mut b = Writer::valid().bytes();
+        let len = b.len() as i32;
+        b[8 + 13 * 8..12 + 13 * 8].copy_from_slice(&i(len - 50));
+        assert!(matches!(
+            parse(&b),
+            Err(BspError::LumpOutOfFile {
+                lump: "surfaces",
+                ..
+            })
+        ));
+        // Negative length.
+        let mut b = Writer::valid().bytes();
+        b[12 + 2 * 8..16 + 2 * 8].copy_from_slice(&i(-16));
+        assert!(matches!(
+            parse(&b),
+            Err(BspError::LumpOutOfFile {
+                lump: "planes",
+                length: -16,
+                ..
+            })
+        ));
+    }
+
+    #[test]
+    fn lengths_must_be_whole_records() {
+        let mut w = Writer::valid();
+        w.lumps[10].pop();
+        assert_eq!(
+            parse(&w.bytes()),
+            Err(BspError::LumpNotMultiple {
+                lump: "drawverts",
+                length: 175,
+                record: 44
+            })
+        );
+    }
+
+    fn index_error(w: Writer) -> (&'static str, &'static str, i64) {
+        match parse(&w.bytes()) {
+            Err(BspError::IndexOutOfRange {
+                lump, field, value, ..
+            }) => (lump, field, value),
+            other => panic!("expected IndexOutOfRange, got {other:?}"),
+        }
+    }
+
+    #[test]
+    fn out_of_range_indices_name_lump_field_and_value() {
+        assert_eq!(
+            index_error(Writer::valid().set(13, 0, 5)),
+            ("surfaces", "shaderNum", 5)
+        );
+        assert_eq!(index_error(Writer::valid().set(13, 16, 9)).0, "surfaces");
+        assert_eq!(index_error(Writer::valid().set(13, 24, 60)).0, "surfaces");
+        assert_eq!(
+            index_error(Writer::valid().set(13, 28, 3)),
+            ("surfaces", "lightmapNum", 3)
+        );
+        assert_eq!(
+            index_error(Writer::valid().set(11, 8, 4)),
+            ("surfaces", "drawindex (relative to firstVert)", 4)
+        );
+        assert_eq!(
+            index_error(Writer::valid().set(3, 0, 7)),
+            ("nodes", "plane", 7)
+        );
+        assert_eq!(
+            index_error(Writer::valid().set(3, 4, -9)),
+            ("nodes", "children[0]", 8)
+        );
+        assert_eq!(
+            index_error(Writer::valid().set(4, 0, 2)),
+            ("leafs", "cluster", 2)
+        );
+        assert_eq!(index_error(Writer::valid().set(4, 36, 2)).0, "leafs");
+        assert_eq!(
+            index_error(Writer::valid().set(5, 0, 1)),
+            ("leafsurfaces", "surface", 1)
+        );
+        assert_eq!(index_error(Writer::valid().set(7, 28, 2)).0, "models");
+        assert_eq!(
+            index_error(Writer::valid().set(9, 4, 1)),
+            ("brushsides", "shader", 1)
+        );
+        assert_eq!(
+            index_error(Writer::valid().set(11, 0, -1)),
+            ("drawindexes", "index", -1)
+        );
+    }
+
+    #[test]
+    fn invalid_values_and_absurd_counts() {
+        let invalid = |w: Writer| match parse(&w.bytes()) {
+            Err(BspError::Invalid { lump, field, .. }) => (lump, field),
+            other => panic!("expected Invalid, got {other:?}"),
+        };
+        assert_eq!(
+            invalid(Writer::valid().set(13, 8, 9)),
+            ("surfaces", "surfaceType")
+        );
+        // A node child pointing back at itself would make tree walks loop.
+        let mut w = Writer::valid();
+        let node = w.lumps[3].clone();
+        w.lumps[3].extend(node);
+        let w = w.set(3, 4, 0).set(3, 36 + 4, -1);
+        assert_eq!(invalid(w), ("nodes", "children[0]"));
+        // Vis claiming two billion clusters, and too few bytes per cluster.
+        assert_eq!(
+            invalid(Writer::valid().set(16, 0, 2_000_000_000)).0,
+            "visibility"
+        );
+        assert_eq!(
+            invalid(Writer::valid().set(16, 4, 0)),
+            ("visibility", "clusterBytes")
+        );
+        // Patches: even, tiny and absurd sizes, and a size that disagrees with numVerts.
+        let patch = |w: i32, h: i32| Writer::valid().set(13, 8, 2).set(13, 96, w).set(13, 100, h);
+        assert_eq!(invalid(patch(2, 2)), ("surfaces", "patchWidth"));
+        assert_eq!(invalid(patch(3, 1_000_001)), ("surfaces", "patchHeight"));
+        assert_eq!(invalid(patch(3, 3)), ("surfaces", "patchWidth*patchHeight"));
+        // A NaN vertex.
+        let mut w = Writer::valid();
+        w.lumps[10][0..4].copy_from_slice(&f(f32::NAN));
+        assert!(matches!(
+            parse(&w.bytes()),
+            Err(BspError::NotFinite {
+                lump: "drawverts",
+                ..
+            })
+        ));
+    }
+
+    #[test]
+    fn a_missing_fog_is_repaired_with_a_warning() {
+        let b = parse(&Writer::valid().set(13, 4, 0).bytes()).unwrap();
+        assert_eq!(b.surfaces[0].fog, -1);
+        assert_eq!(b.warnings.len(), 1);
+    }
+}

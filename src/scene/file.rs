@@ -1,0 +1,441 @@
+//! Scene files (TOML): a Quake 3 map or the built-in room, a camera, lights, models and option
+//! overrides. `assets/scenes/` holds the benchmark scenes.
+//!
+//! ```toml
+//! name = "oa_dm1"
+//! [map]
+//! bsp = "maps/oa_dm1.bsp"        # path inside the data set
+//! # data = "/somewhere"           # default: $SHADOWLAB_DATA or ~/.cache/shadowlab/openarena
+//! # paks = ["baseoa/pak0.pk3"]    # default: every baseoa/*.pk3, later names override earlier
+//! [camera]
+//! spawn = 0                       # the map's first spawn point, eye 26 units up, its yaw
+//! # position = [x, y, z]  yaw = 90  pitch = -10  target = [x, y, z]  fov = 90  near = 4
+//! [lights]
+//! from = "none"                   # or "entities" (the map's light entities) or "rtlights"
+//! # rtlights = "oa_dm3.rtlights"  # a DarkPlaces file, relative to this scene file
+//! [[light]]
+//! kind = "spot"                   # or "omni"
+//! position = [0, 0, 100]
+//! target = [0, 0, 0]              # or direction = [0, 0, -1]
+//! cutoff = 40                     # spot half-angle, degrees
+//! radius = 800                    # range
+//! color = [1, 1, 1]
+//! [[model]]
+//! player = "sarge"                # or md3 = "models/..."; skin = "default"; frame = 0
+//! position = [0, 0, 24]
+//! yaw = 90
+//! [options]
+//! "shadow_map.size" = 1024
+//! ```
+
+use super::{Camera, Light, LightKind, Scene, builtin};
+use crate::options::Options;
+use crate::q3::builder::SceneBuilder;
+use crate::q3::entities;
+use crate::q3::model::{self, ModelError};
+use crate::q3::pk3::{self, Vfs, VfsError};
+use crate::q3::rtlights;
+use crate::q3::shader::ShaderLibrary;
+use crate::q3::world::{self, MapCounts, MapError};
+use glam::{Mat4, Vec3};
+use serde::Deserialize;
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+use thiserror::Error;
+
+#[derive(Debug, Error)]
+pub enum SceneFileError {
+    #[error("{path}: {source}")]
+    Io {
+        path: PathBuf,
+        source: std::io::Error,
+    },
+    #[error("{path}: {message}")]
+    Toml { path: PathBuf, message: String },
+    #[error("{path}: {message}")]
+    Invalid { path: PathBuf, message: String },
+    #[error(transparent)]
+    Vfs(#[from] VfsError),
+    #[error(transparent)]
+    Map(#[from] MapError),
+    #[error(transparent)]
+    Model(#[from] ModelError),
+}
+
+#[derive(Debug, Clone, Deserialize, Default)]
+#[serde(deny_unknown_fields)]
+pub struct MapSection {
+    pub bsp: String,
+    pub data: Option<PathBuf>,
+    pub paks: Option<Vec<PathBuf>>,
+}
+
+#[derive(Debug, Clone, Deserialize, Default)]
+#[serde(deny_unknown_fields)]
+pub struct CameraSection {
+    pub spawn: Option<usize>,
+    pub position: Option<[f32; 3]>,
+    pub target: Option<[f32; 3]>,
+    pub yaw: Option<f32>,
+    pub pitch: Option<f32>,
+    pub fov: Option<f32>,
+    pub near: Option<f32>,
+}
+
+#[derive(Debug, Clone, Copy, Deserialize, Default, PartialEq, Eq)]
+#[serde(rename_all = "snake_case")]
+pub enum LightSource {
+    /// Only the `[[light]]` entries.
+    #[default]
+    None,
+    /// The map's `light` entities.
+    Entities,
+    /// A DarkPlaces `.rtlights` file.
+    Rtlights,
+}
+
+#[derive(Debug, Clone, Deserialize, Default)]
+#[serde(deny_unknown_fields)]
+pub struct LightsSection {
+    #[serde(default)]
+    pub from: LightSource,
+    pub rtlights: Option<PathBuf>,
+}
+
+#[derive(Debug, Clone, Copy, Deserialize, PartialEq, Eq)]
+#[serde(rename_all = "snake_case")]
+pub enum LightKindName {
+    Spot,
+    Omni,
+}
+
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct LightSection {
+    pub name: Option<String>,
+    pub kind: LightKindName,
+    pub position: [f32; 3],
+    pub target: Option<[f32; 3]>,
+    pub direction: Option<[f32; 3]>,
+    pub cutoff: Option<f32>,
+    pub radius: f32,
+    pub color: Option<[f32; 3]>,
+}
+
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ModelSection {
+    pub player: Option<String>,
+    pub md3: Option<String>,
+    pub skin: Option<String>,
+    pub position: [f32; 3],
+    #[serde(default)]
+    pub yaw: f32,
+    /// Frame of a single MD3.
+    pub frame: Option<usize>,
+    /// Legs and torso frames of a player (default: idle legs, standing torso).
+    pub legs_frame: Option<usize>,
+    pub torso_frame: Option<usize>,
+}
+
+/// A parsed scene file.
+#[derive(Debug, Clone, Deserialize, Default)]
+#[serde(deny_unknown_fields)]
+pub struct SceneFile {
+    pub name: Option<String>,
+    /// The Quake 3 map; without one the scene is the built-in room.
+    pub map: Option<MapSection>,
+    #[serde(default)]
+    pub camera: CameraSection,
+    #[serde(default)]
+    pub lights: LightsSection,
+    #[serde(default)]
+    pub light: Vec<LightSection>,
+    #[serde(default)]
+    pub model: Vec<ModelSection>,
+    /// Option overrides, as `shadowlab options` lists them.
+    #[serde(default)]
+    pub options: toml::Table,
+    #[serde(skip)]
+    pub path: PathBuf,
+}
+
+/// What loading found besides the scene.
+#[derive(Debug, Clone, Default)]
+pub struct LoadReport {
+    pub counts: Option<MapCounts>,
+    pub warnings: Vec<String>,
+    pub load_ms: f64,
+}
+
+fn finite3(v: [f32; 3]) -> bool {
+    v.iter().all(|x| x.is_finite())
+}
+
+impl SceneFile {
+    pub fn read(path: &Path) -> Result<SceneFile, SceneFileError> {
+        let text = std::fs::read_to_string(path).map_err(|source| SceneFileError::Io {
+            path: path.to_path_buf(),
+            source,
+        })?;
+        let mut f: SceneFile = toml::from_str(&text).map_err(|e| SceneFileError::Toml {
+            path: path.to_path_buf(),
+            message: e.to_string(),
+        })?;
+        f.path = path.to_path_buf();
+        Ok(f)
+    }
+
+    fn invalid(&self, message: impl Into<String>) -> SceneFileError {
+        SceneFileError::Invalid {
+            path: self.path.clone(),
+            message: message.into(),
+        }
+    }
+
+    fn relative(&self, p: &Path) -> PathBuf {
+        if p.is_absolute() {
+            p.to_path_buf()
+        } else {
+            self.path.parent().unwrap_or(Path::new(".")).join(p)
+        }
+    }
+
+    fn light(&self, i: usize, l: &LightSection) -> Result<Light, SceneFileError> {
+        let name = l.name.clone().unwrap_or_else(|| format!("light{i}"));
+        if !(finite3(l.position) && l.radius.is_finite() && l.radius > 0.0) {
+            return Err(self.invalid(format!(
+                "[[light]] {name}: position and radius > 0 must be finite numbers"
+            )));
+        }
+        let position = Vec3::from_array(l.position);
+        let color = Vec3::from_array(l.color.unwrap_or([1.0; 3]));
+        let kind = match l.kind {
+            LightKindName::Omni => LightKind::Omni,
+            LightKindName::Spot => {
+                let dir = match (l.target, l.direction) {
+                    (Some(t), _) => Vec3::from_array(t) - position,
+                    (None, Some(d)) => Vec3::from_array(d),
+                    (None, None) => {
+                        return Err(self.invalid(format!(
+                            "[[light]] {name}: a spot needs target or direction"
+                        )));
+                    }
+                };
+                let cutoff = l.cutoff.unwrap_or(45.0);
+                if !(dir.length_squared() > 0.0 && dir.is_finite() && cutoff > 0.0 && cutoff < 90.0)
+                {
+                    return Err(self.invalid(format!(
+                        "[[light]] {name}: the direction must be non-zero and the cutoff within (0, 90) degrees"
+                    )));
+                }
+                LightKind::Spot {
+                    direction: dir.normalize(),
+                    cutoff_deg: cutoff,
+                }
+            }
+        };
+        Ok(Light {
+            name,
+            kind,
+            position,
+            color,
+            radius: l.radius,
+        })
+    }
+
+    fn vfs(&self, map: &MapSection) -> Result<Vfs, SceneFileError> {
+        let data = map
+            .data
+            .as_ref()
+            .map(|d| self.relative(d))
+            .unwrap_or_else(pk3::data_dir);
+        match &map.paks {
+            None => Ok(Vfs::open_data_dir(&data)?),
+            Some(paks) => {
+                let mut vfs = Vfs::new();
+                for p in paks {
+                    let full = data.join(p);
+                    if !full.exists() {
+                        return Err(VfsError::NoData(data.clone()).into());
+                    }
+                    vfs.add_pk3(&full)?;
+                }
+                Ok(vfs)
+            }
+        }
+    }
+
+    /// Builds the scene with `options` (which decide how maps are tessellated and lit).
+    pub fn build(&self, options: &Options) -> Result<(Scene, LoadReport), SceneFileError> {
+        let start = Instant::now();
+        let mut report = LoadReport::default();
+        let mut scene = match &self.map {
+            None => builtin::default_scene(),
+            Some(map) => {
+                let vfs = self.vfs(map)?;
+                let shaders = load_shader_library(&vfs, &mut report.warnings);
+                let mut builder = SceneBuilder::new(&world::map_name(&map.bsp), &shaders);
+                let info = world::load_map(&mut builder, &vfs, &map.bsp, &options.q3)?;
+                report.warnings.extend(info.warnings.iter().cloned());
+                let mut lights = match self.lights.from {
+                    LightSource::None => Vec::new(),
+                    LightSource::Entities => entities::light_entities(&info.entities),
+                    LightSource::Rtlights => {
+                        let file = self.lights.rtlights.as_ref().ok_or_else(|| {
+                            self.invalid("[lights] from = \"rtlights\" needs rtlights = \"FILE\"")
+                        })?;
+                        let path = self.relative(file);
+                        let text = std::fs::read_to_string(&path).map_err(|source| {
+                            SceneFileError::Io {
+                                path: path.clone(),
+                                source,
+                            }
+                        })?;
+                        rtlights::parse_rtlights(&text)
+                            .map_err(|e| SceneFileError::Invalid {
+                                path,
+                                message: e.to_string(),
+                            })?
+                            .iter()
+                            .enumerate()
+                            .map(|(i, l)| l.to_light(&format!("rt{i}")))
+                            .collect()
+                    }
+                };
+                builder.scene.lights.append(&mut lights);
+                for (i, m) in self.model.iter().enumerate() {
+                    if !finite3(m.position) || !m.yaw.is_finite() {
+                        return Err(
+                            self.invalid(format!("[[model]] {i}: position and yaw must be finite"))
+                        );
+                    }
+                    let transform = Mat4::from_translation(Vec3::from_array(m.position))
+                        * Mat4::from_rotation_z(m.yaw.to_radians());
+                    match (&m.player, &m.md3) {
+                        (Some(p), None) => {
+                            let frames = m.legs_frame.zip(m.torso_frame);
+                            model::add_player(
+                                &mut builder,
+                                &vfs,
+                                p,
+                                m.skin.as_deref().unwrap_or("default"),
+                                frames,
+                                transform,
+                            )?;
+                        }
+                        (None, Some(path)) => {
+                            model::add_md3(
+                                &mut builder,
+                                &vfs,
+                                path,
+                                m.frame.unwrap_or(0),
+                                transform,
+                            )?;
+                        }
+                        _ => {
+                            return Err(self.invalid(format!(
+                                "[[model]] {i}: give exactly one of player or md3"
+                            )));
+                        }
+                    }
+                }
+                let (mut scene, missing) = builder.finish(&vfs, options.q3.progress);
+                if !missing.is_empty() {
+                    let names: Vec<&str> = missing.iter().map(|(n, _)| n.as_str()).collect();
+                    let w = format!(
+                        "{} textures missing, drawn as a magenta checker: {}",
+                        missing.len(),
+                        names.join(", ")
+                    );
+                    log::warn!("{w}");
+                    report.warnings.push(w);
+                }
+                scene.camera = match self.camera.spawn {
+                    Some(i) => {
+                        let s = info.spawns.get(i).ok_or_else(|| {
+                            self.invalid(format!(
+                                "[camera] spawn = {i}, but the map has {} spawn points",
+                                info.spawns.len()
+                            ))
+                        })?;
+                        Camera {
+                            position: s.origin + Vec3::Z * super::camera::Q3_VIEW_HEIGHT,
+                            yaw_deg: s.yaw_deg,
+                            ..Camera::default()
+                        }
+                    }
+                    None => Camera::default(),
+                };
+                report.counts = Some(info.counts);
+                scene
+            }
+        };
+        self.apply_camera(&mut scene.camera)?;
+        for (i, l) in self.light.iter().enumerate() {
+            let light = self.light(i, l)?;
+            scene.lights.push(light);
+        }
+        if let Some(n) = &self.name {
+            scene.name = n.clone();
+        }
+        scene.options = self.options.clone();
+        report.load_ms = start.elapsed().as_secs_f64() * 1e3;
+        Ok((scene, report))
+    }
+
+    fn apply_camera(&self, c: &mut Camera) -> Result<(), SceneFileError> {
+        let s = &self.camera;
+        if let Some(p) = s.position {
+            if !finite3(p) {
+                return Err(self.invalid("[camera] position must be finite"));
+            }
+            c.position = Vec3::from_array(p);
+        }
+        if let Some(t) = s.target {
+            let looking = Camera::looking_at(c.position, Vec3::from_array(t));
+            c.yaw_deg = looking.yaw_deg;
+            c.pitch_deg = looking.pitch_deg;
+        }
+        if let Some(y) = s.yaw {
+            c.yaw_deg = y;
+        }
+        if let Some(p) = s.pitch {
+            c.pitch_deg = p.clamp(-89.9, 89.9);
+        }
+        if let Some(f) = s.fov {
+            if !(f > 1.0 && f < 179.0) {
+                return Err(self.invalid("[camera] fov must be within (1, 179) degrees"));
+            }
+            c.fov_x_deg = f;
+        }
+        if let Some(n) = s.near {
+            if !(n > 0.0 && n.is_finite()) {
+                return Err(self.invalid("[camera] near must be > 0"));
+            }
+            c.near = n;
+        }
+        if !(c.yaw_deg.is_finite() && c.pitch_deg.is_finite()) {
+            return Err(self.invalid("[camera] yaw and pitch must be finite"));
+        }
+        Ok(())
+    }
+}
+
+/// Every `scripts/*.shader` of the data set, in name order; warnings are collected.
+pub fn load_shader_library(vfs: &Vfs, warnings: &mut Vec<String>) -> ShaderLibrary {
+    let mut lib = ShaderLibrary::new();
+    for name in vfs.list("scripts/", ".shader") {
+        match vfs.read(&name) {
+            Ok(data) => {
+                lib.add_script(&String::from_utf8_lossy(&data), &name);
+            }
+            Err(e) => warnings.push(format!("{name}: {e}")),
+        }
+    }
+    let n = lib.warnings().len();
+    if n > 0 {
+        log::debug!("{n} shader script problems skipped");
+    }
+    lib
+}
