@@ -15,6 +15,13 @@ uniform float u_cos_cutoff;   // -1 for omni lights
 uniform float u_cos_inner;    // where the cone edge starts to soften
 uniform float u_radius;
 
+#ifdef MASK_OUTPUT
+// Mask pass: write the decision instead of light (frame::MaskValue / 255): 1 lit, 2 shadowed.
+// u_mask_value forces it (stencil-based techniques decide by the stencil test): 0 = from
+// the shader's own visibility.
+uniform int u_mask_value;
+#endif
+
 out vec4 o_color;
 
 void main() {
@@ -32,5 +39,12 @@ void main() {
         ? smoothstep(u_cos_cutoff, u_cos_inner, dot(-l, u_spot_dir))
         : 1.0;
     float diffuse = max(dot(n, l), 0.0) * falloff * cone;
-    o_color = vec4(albedo.rgb * u_light_color * diffuse, 1.0);
+    // Fraction of the light that reaches the fragment (1 without a shadow technique).
+    float visibility = 1.0;
+#ifdef MASK_OUTPUT
+    int decision = u_mask_value != 0 ? u_mask_value : (visibility >= 0.5 ? 1 : 2);
+    o_color = vec4(float(decision) / 255.0, 0.0, 0.0, 1.0);
+#else
+    o_color = vec4(albedo.rgb * u_light_color * diffuse * visibility, 1.0);
+#endif
 }

@@ -14,6 +14,85 @@ pub struct PassTime {
     pub clock: &'static str,
 }
 
+/// One light's decision at one pixel. Stored as `u8` in masks and mask PNGs.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[repr(u8)]
+pub enum MaskValue {
+    /// Background, outside the light's cone or range, facing away, or a surface that takes no
+    /// dynamic light.
+    NotReceiver = 0,
+    Lit = 1,
+    Shadowed = 2,
+}
+
+impl MaskValue {
+    pub fn from_u8(v: u8) -> MaskValue {
+        match v {
+            1 => MaskValue::Lit,
+            2 => MaskValue::Shadowed,
+            _ => MaskValue::NotReceiver,
+        }
+    }
+}
+
+/// One light's decision for every pixel (row-major, top row first; values of [`MaskValue`]).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Mask {
+    pub light: usize,
+    pub width: u32,
+    pub height: u32,
+    pub values: Vec<u8>,
+}
+
+impl Mask {
+    pub fn get(&self, x: u32, y: u32) -> MaskValue {
+        MaskValue::from_u8(self.values[(y * self.width + x) as usize])
+    }
+
+    pub fn count(&self, v: MaskValue) -> usize {
+        self.values.iter().filter(|&&x| x == v as u8).count()
+    }
+
+    /// Black = not a receiver, white = lit, mid grey = shadowed.
+    pub fn save_png(&self, path: &Path) -> Result<(), image::ImageError> {
+        let grey: Vec<u8> = self
+            .values
+            .iter()
+            .map(|&v| match MaskValue::from_u8(v) {
+                MaskValue::NotReceiver => 0,
+                MaskValue::Lit => 255,
+                MaskValue::Shadowed => 96,
+            })
+            .collect();
+        image::save_buffer(
+            path,
+            &grey,
+            self.width,
+            self.height,
+            image::ExtendedColorType::L8,
+        )
+    }
+}
+
+/// What the camera sees at each pixel, read back from a G-buffer pass (row-major, top row first).
+#[derive(Debug, Clone, PartialEq)]
+pub struct GBuffer {
+    pub width: u32,
+    pub height: u32,
+    /// World position of the visible surface.
+    pub position: Vec<[f32; 3]>,
+    /// Shading normal, facing the camera on two-sided surfaces.
+    pub normal: Vec<[f32; 3]>,
+    /// Per pixel: 0 background, 1 a surface that receives dynamic light, 2 one that does not.
+    pub kind: Vec<u8>,
+}
+
+impl GBuffer {
+    pub fn is_receiver_surface(&self, i: usize) -> bool {
+        self.kind[i] == 1
+    }
+}
+
 #[derive(Debug, Clone)]
 pub struct Frame {
     pub width: u32,
@@ -25,6 +104,10 @@ pub struct Frame {
     pub passes: Vec<PassTime>,
     /// Wall time of the whole frame including glFinish.
     pub frame_ms: f64,
+    /// What the camera sees per pixel (when masks were requested).
+    pub gbuffer: Option<GBuffer>,
+    /// Each planned light's decision per pixel (when masks were requested).
+    pub masks: Vec<Mask>,
 }
 
 impl Frame {

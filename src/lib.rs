@@ -10,5 +10,7 @@ pub mod gl;
 pub mod options;
 pub mod plan;
 pub mod q3;
+pub mod report;
 pub mod scene;
 pub mod shadow;
+pub mod truth;

@@ -25,6 +25,8 @@ enum Command {
     Options(commands::options::Args),
     /// Print what a Quake 3 map holds, as JSON.
     Inspect(commands::inspect::Args),
+    /// Measure frame time and error against the exact reference over a sweep of options.
+    Bench(commands::bench::Args),
 }
 
 fn main() {
@@ -37,6 +39,7 @@ fn main() {
         Command::Render(a) => commands::render::run(&cli.common, &a),
         Command::Options(a) => commands::options::run(&a),
         Command::Inspect(a) => commands::inspect::run(&cli.common, &a),
+        Command::Bench(a) => commands::bench::run(&cli.common, &a),
     };
     if let Err(e) = result {
         eprintln!("error: {e:#}");

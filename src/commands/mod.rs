@@ -1,5 +1,6 @@
 //! Subcommands and what they share: option assembly, scene loading, context creation.
 
+pub mod bench;
 pub mod info;
 pub mod inspect;
 pub mod options;

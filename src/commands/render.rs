@@ -2,7 +2,73 @@
 
 use super::{CommonArgs, load, start_gl};
 use anyhow::{Context, Result};
-use std::path::PathBuf;
+use shadowlab::frame::Frame;
+use shadowlab::gl::FrameRequest;
+use shadowlab::scene::Scene;
+use shadowlab::truth::{self, Counts, Reference, Tracing};
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+/// Masks, reference masks and error images of every light, with the error rates.
+fn write_masks(scene: &Scene, frame: &Frame, dir: &Path) -> Result<()> {
+    std::fs::create_dir_all(dir).with_context(|| format!("cannot create {}", dir.display()))?;
+    let gbuffer = frame
+        .gbuffer
+        .as_ref()
+        .context("the frame has no G-buffer")?;
+    let start = Instant::now();
+    let reference = Reference::build(scene);
+    let build_ms = start.elapsed().as_secs_f64() * 1e3;
+    let mut total = Counts::default();
+    let mut trace_ms = 0.0;
+    for mask in &frame.masks {
+        let t = Instant::now();
+        let exact = truth::reference_mask(
+            &reference,
+            gbuffer,
+            &scene.lights[mask.light],
+            mask.light,
+            Tracing::Bvh,
+        );
+        trace_ms += t.elapsed().as_secs_f64() * 1e3;
+        let counts = truth::compare(mask, &exact);
+        total.add(&counts);
+        let r = counts.rates();
+        println!(
+            "light{} ({}): {} receivers, {:.3}% reference-shadowed, error {:.3}% (false shadow {:.3}%, false lit {:.3}%), {:.3}% excluding the boundary band, {} receiver mismatches",
+            mask.light,
+            scene.lights[mask.light].name,
+            r.receiver_pixels,
+            100.0 * counts.reference_shadowed as f64 / r.receiver_pixels.max(1) as f64,
+            100.0 * r.total,
+            100.0 * r.false_shadow,
+            100.0 * r.false_lit,
+            100.0 * r.total_excl_boundary,
+            counts.receiver_mismatch
+        );
+        let name = |kind: &str| dir.join(format!("light{}.{kind}.png", mask.light));
+        mask.save_png(&name("mask"))?;
+        exact.save_png(&name("reference"))?;
+        image::save_buffer(
+            name("error"),
+            &truth::error_image(mask, &exact),
+            mask.width,
+            mask.height,
+            image::ExtendedColorType::Rgba8,
+        )?;
+    }
+    let r = total.rates();
+    println!(
+        "all lights: {} receivers, error {:.3}%, {:.3}% excluding the boundary band; reference: {} triangles, BVH {:.0} ms, rays {:.0} ms",
+        r.receiver_pixels,
+        100.0 * r.total,
+        100.0 * r.total_excl_boundary,
+        reference.triangle_count(),
+        build_ms,
+        trace_ms
+    );
+    Ok(())
+}
 
 #[derive(clap::Args)]
 pub struct Args {
@@ -12,6 +78,10 @@ pub struct Args {
     /// Where to write the PNG.
     #[arg(long, default_value = "shadowlab.png")]
     out: PathBuf,
+    /// Also write each light's mask, the exact reference mask and the error image into DIR
+    /// (light<i>.mask.png, light<i>.reference.png, light<i>.error.png) and print the errors.
+    #[arg(long, value_name = "DIR")]
+    mask: Option<PathBuf>,
 }
 
 pub fn run(common: &CommonArgs, args: &Args) -> Result<()> {
@@ -22,7 +92,10 @@ pub fn run(common: &CommonArgs, args: &Args) -> Result<()> {
     } = load(common, args.scene.as_deref())?;
     let (mut ctx, mut renderer) = start_gl(&options)?;
     renderer.load_scene(&scene)?;
-    let frame = renderer.render(&scene, &options)?;
+    let request = FrameRequest {
+        masks: args.mask.is_some(),
+    };
+    let frame = renderer.render_with(&scene, &options, request)?;
     if let Some(window) = ctx.window() {
         // Show the frame too, proving the window path presents what it rendered.
         renderer.present_to_default(options.width, options.height);
@@ -32,6 +105,9 @@ pub fn run(common: &CommonArgs, args: &Args) -> Result<()> {
     frame
         .save_png(&args.out)
         .with_context(|| format!("cannot write {}", args.out.display()))?;
+    if let Some(dir) = &args.mask {
+        write_masks(&scene, &frame, dir)?;
+    }
     // Per-light passes are summed so that 64 lights still give one readable line.
     let mut totals: Vec<(String, f64, usize)> = Vec::new();
     for p in &frame.passes {

@@ -13,4 +13,4 @@ pub mod upload;
 pub mod window;
 
 pub use context::{Backend, ContextError, GlContext, create_context};
-pub use renderer::{RenderError, Renderer};
+pub use renderer::{FrameRequest, RenderError, Renderer};

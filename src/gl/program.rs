@@ -28,6 +28,7 @@ pub mod sources {
     pub const WORLD_VERT: &str = include_str!("../../shaders/world.vert");
     pub const UNLIT_FRAG: &str = include_str!("../../shaders/unlit.frag");
     pub const LIT_FRAG: &str = include_str!("../../shaders/lit.frag");
+    pub const GBUFFER_FRAG: &str = include_str!("../../shaders/gbuffer.frag");
     pub const FULLSCREEN_VERT: &str = include_str!("../../shaders/fullscreen.vert");
     pub const BLIT_FRAG: &str = include_str!("../../shaders/blit.frag");
 }

@@ -4,13 +4,13 @@
 use super::caps::{self, Caps};
 use super::passes::{self, PassContext};
 use super::program::{Program, ProgramError, sources};
-use super::target::Framebuffer;
+use super::target::{Framebuffer, GBufferTarget, MaskTarget};
 use super::timing::PassTimer;
 use super::upload::GpuScene;
-use crate::frame::Frame;
+use crate::frame::{Frame, GBuffer, Mask};
 use crate::options::Options;
 use crate::plan::Plan;
-use crate::scene::Scene;
+use crate::scene::{Camera, Scene};
 use glow::HasContext;
 use std::sync::Arc;
 use std::time::Instant;
@@ -29,6 +29,8 @@ pub enum RenderError {
 struct Programs {
     unlit: Program,
     lit: Program,
+    lit_mask: Program,
+    gbuffer: Program,
     blit: Program,
 }
 
@@ -43,6 +45,20 @@ impl Programs {
                 &[],
             )?,
             lit: Program::new(gl, "lit", sources::WORLD_VERT, Some(sources::LIT_FRAG), &[])?,
+            lit_mask: Program::new(
+                gl,
+                "lit_mask",
+                sources::WORLD_VERT,
+                Some(sources::LIT_FRAG),
+                &["MASK_OUTPUT"],
+            )?,
+            gbuffer: Program::new(
+                gl,
+                "gbuffer",
+                sources::WORLD_VERT,
+                Some(sources::GBUFFER_FRAG),
+                &[],
+            )?,
             blit: Program::new(
                 gl,
                 "blit",
@@ -53,10 +69,23 @@ impl Programs {
         })
     }
     fn delete(&self, gl: &glow::Context) {
-        self.unlit.delete(gl);
-        self.lit.delete(gl);
-        self.blit.delete(gl);
+        for p in [
+            &self.unlit,
+            &self.lit,
+            &self.lit_mask,
+            &self.gbuffer,
+            &self.blit,
+        ] {
+            p.delete(gl);
+        }
     }
+}
+
+/// What a frame should produce besides its image and timings.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct FrameRequest {
+    /// The G-buffer and each light's decision mask (drawn after the timed frame).
+    pub masks: bool,
 }
 
 pub struct Renderer {
@@ -66,6 +95,8 @@ pub struct Renderer {
     target: Framebuffer,
     gpu: Option<GpuScene>,
     timer: PassTimer,
+    /// Created on the first frame that asks for masks.
+    measure_targets: Option<(GBufferTarget, MaskTarget)>,
     /// Core profile draws need a bound VAO even without attributes (full-screen triangles).
     empty_vao: glow::VertexArray,
 }
@@ -86,6 +117,7 @@ impl Renderer {
             target,
             gpu: None,
             timer,
+            measure_targets: None,
             empty_vao,
         })
     }
@@ -110,24 +142,57 @@ impl Renderer {
             let new = Framebuffer::new(&self.gl, width, height).map_err(RenderError::Gl)?;
             self.target.delete(&self.gl);
             self.target = new;
+            if let Some((g, m)) = self.measure_targets.take() {
+                g.delete(&self.gl);
+                m.delete(&self.gl);
+            }
         }
         Ok(())
     }
 
     /// Plans and renders one frame of `scene` (which must be the loaded one).
     pub fn render(&mut self, scene: &Scene, options: &Options) -> Result<Frame, RenderError> {
-        let plan = Plan::build(scene, options);
-        self.execute(scene, &plan, options)
+        self.render_with(scene, options, FrameRequest::default())
     }
 
-    /// Runs the passes of `plan`: the unlit world, then each light's additive pass.
+    /// Plans and renders one frame, with what `request` asks for besides the image.
+    pub fn render_with(
+        &mut self,
+        scene: &Scene,
+        options: &Options,
+        request: FrameRequest,
+    ) -> Result<Frame, RenderError> {
+        self.render_at(scene, &scene.camera, options, request)
+    }
+
+    /// Plans and renders one frame seen from `camera` instead of the scene's camera.
+    pub fn render_at(
+        &mut self,
+        scene: &Scene,
+        camera: &Camera,
+        options: &Options,
+        request: FrameRequest,
+    ) -> Result<Frame, RenderError> {
+        let plan = Plan::build_at(scene, camera, options);
+        self.execute(scene, &plan, options, request)
+    }
+
+    /// Runs the passes of `plan`: the unlit world, then each light's additive pass; then, untimed,
+    /// the measurement passes the request asks for.
     pub fn execute(
         &mut self,
         scene: &Scene,
         plan: &Plan,
         options: &Options,
+        request: FrameRequest,
     ) -> Result<Frame, RenderError> {
         self.ensure_size(plan.camera.width, plan.camera.height)?;
+        if request.masks && self.measure_targets.is_none() {
+            let g = GBufferTarget::new(&self.gl, self.target.width, self.target.height)
+                .map_err(RenderError::Gl)?;
+            let m = MaskTarget::new(&self.gl, &self.target).map_err(RenderError::Gl)?;
+            self.measure_targets = Some((g, m));
+        }
         let gpu = self.gpu.as_ref().ok_or(RenderError::NoScene)?;
         let gl: &glow::Context = &self.gl;
         let start = Instant::now();
@@ -156,13 +221,42 @@ impl Renderer {
                 "the frame raised GL error 0x{error:x}"
             )));
         }
+        let rgba = self.target.read_rgba(gl);
+        let (gbuffer, masks) = match (&self.measure_targets, request.masks) {
+            (Some((gtarget, mtarget)), true) => {
+                gtarget_bind(gl, gtarget);
+                passes::gbuffer::draw(&ctx, &self.programs.gbuffer);
+                let gbuffer = read_gbuffer(gl, gtarget);
+                let mut masks = Vec::with_capacity(plan.lights.len());
+                for lp in &plan.lights {
+                    mtarget.bind(gl);
+                    // SAFETY: clears the mask to "not a receiver"; depth and stencil untouched.
+                    unsafe {
+                        gl.color_mask(true, true, true, true);
+                        gl.clear_color(0.0, 0.0, 0.0, 0.0);
+                        gl.clear(glow::COLOR_BUFFER_BIT);
+                    }
+                    passes::lit::draw_mask(&ctx, &self.programs.lit_mask, lp.light);
+                    masks.push(Mask {
+                        light: lp.light,
+                        width: mtarget.width,
+                        height: mtarget.height,
+                        values: mtarget.read(gl),
+                    });
+                }
+                (Some(gbuffer), masks)
+            }
+            _ => (None, Vec::new()),
+        };
         Ok(Frame {
             width: self.target.width,
             height: self.target.height,
-            rgba: self.target.read_rgba(gl),
+            rgba,
             view_proj: plan.camera.view_proj,
             passes,
             frame_ms,
+            gbuffer,
+            masks,
         })
     }
 
@@ -188,6 +282,29 @@ impl Renderer {
     }
 }
 
+fn gtarget_bind(gl: &glow::Context, t: &GBufferTarget) {
+    // SAFETY: the G-buffer framebuffer is complete.
+    unsafe {
+        gl.bind_framebuffer(glow::FRAMEBUFFER, Some(t.fbo));
+        gl.viewport(0, 0, t.width as i32, t.height as i32);
+    }
+}
+
+fn read_gbuffer(gl: &glow::Context, t: &GBufferTarget) -> GBuffer {
+    let position = t.read(gl, 0);
+    let normal = t.read(gl, 1);
+    GBuffer {
+        width: t.width,
+        height: t.height,
+        kind: normal
+            .iter()
+            .map(|n| n[3].round().clamp(0.0, 2.0) as u8)
+            .collect(),
+        position: position.iter().map(|p| [p[0], p[1], p[2]]).collect(),
+        normal: normal.iter().map(|n| [n[0], n[1], n[2]]).collect(),
+    }
+}
+
 impl Drop for Renderer {
     fn drop(&mut self) {
         let gl: &glow::Context = &self.gl;
@@ -196,6 +313,10 @@ impl Drop for Renderer {
         }
         self.programs.delete(gl);
         self.target.delete(gl);
+        if let Some((g, m)) = self.measure_targets.take() {
+            g.delete(gl);
+            m.delete(gl);
+        }
         self.timer.delete(gl);
         // SAFETY: deleting our own VAO once.
         unsafe { gl.delete_vertex_array(self.empty_vao) };

@@ -182,6 +182,240 @@ pub fn set_nearest_clamp(gl: &glow::Context) {
     }
 }
 
+fn texture_2d(
+    gl: &glow::Context,
+    internal: u32,
+    format: u32,
+    ty: u32,
+    width: u32,
+    height: u32,
+) -> Result<glow::Texture, String> {
+    // SAFETY: allocates storage for a new texture; binding reset to 0.
+    unsafe {
+        let t = gl.create_texture()?;
+        gl.bind_texture(glow::TEXTURE_2D, Some(t));
+        gl.tex_image_2d(
+            glow::TEXTURE_2D,
+            0,
+            internal as i32,
+            width as i32,
+            height as i32,
+            0,
+            format,
+            ty,
+            glow::PixelUnpackData::Slice(None),
+        );
+        set_nearest_clamp(gl);
+        gl.bind_texture(glow::TEXTURE_2D, None);
+        Ok(t)
+    }
+}
+
+fn check_complete(gl: &glow::Context, what: &str) -> Result<(), String> {
+    // SAFETY: status query of the bound framebuffer.
+    let status = unsafe { gl.check_framebuffer_status(glow::FRAMEBUFFER) };
+    if status == glow::FRAMEBUFFER_COMPLETE {
+        Ok(())
+    } else {
+        Err(format!(
+            "{what} framebuffer is incomplete (status 0x{status:x})"
+        ))
+    }
+}
+
+/// G-buffer for the exact reference: world position and normal as 32-bit floats, own depth.
+pub struct GBufferTarget {
+    pub fbo: glow::Framebuffer,
+    position: glow::Texture,
+    normal: glow::Texture,
+    depth: glow::Texture,
+    pub width: u32,
+    pub height: u32,
+}
+
+impl GBufferTarget {
+    pub fn new(gl: &glow::Context, width: u32, height: u32) -> Result<GBufferTarget, String> {
+        let position = texture_2d(gl, glow::RGBA32F, glow::RGBA, glow::FLOAT, width, height)?;
+        let normal = texture_2d(gl, glow::RGBA32F, glow::RGBA, glow::FLOAT, width, height)?;
+        let depth = texture_2d(
+            gl,
+            glow::DEPTH_COMPONENT24,
+            glow::DEPTH_COMPONENT,
+            glow::UNSIGNED_INT,
+            width,
+            height,
+        )?;
+        // SAFETY: attaches the textures created above to a new framebuffer.
+        unsafe {
+            let fbo = gl.create_framebuffer()?;
+            gl.bind_framebuffer(glow::FRAMEBUFFER, Some(fbo));
+            for (attachment, tex) in [
+                (glow::COLOR_ATTACHMENT0, position),
+                (glow::COLOR_ATTACHMENT1, normal),
+                (glow::DEPTH_ATTACHMENT, depth),
+            ] {
+                gl.framebuffer_texture_2d(
+                    glow::FRAMEBUFFER,
+                    attachment,
+                    glow::TEXTURE_2D,
+                    Some(tex),
+                    0,
+                );
+            }
+            gl.draw_buffers(&[glow::COLOR_ATTACHMENT0, glow::COLOR_ATTACHMENT1]);
+            let t = GBufferTarget {
+                fbo,
+                position,
+                normal,
+                depth,
+                width,
+                height,
+            };
+            let ok = check_complete(gl, "G-buffer");
+            gl.bind_framebuffer(glow::FRAMEBUFFER, None);
+            if let Err(e) = ok {
+                t.delete(gl);
+                return Err(e);
+            }
+            Ok(t)
+        }
+    }
+
+    /// Reads one RGBA32F attachment, top row first.
+    pub fn read(&self, gl: &glow::Context, attachment: usize) -> Vec<[f32; 4]> {
+        let (w, h) = (self.width as usize, self.height as usize);
+        let mut data = vec![0f32; w * h * 4];
+        // SAFETY: `data` holds w*h RGBA32F texels.
+        unsafe {
+            gl.bind_framebuffer(glow::READ_FRAMEBUFFER, Some(self.fbo));
+            gl.read_buffer(glow::COLOR_ATTACHMENT0 + attachment as u32);
+            gl.pixel_store_i32(glow::PACK_ALIGNMENT, 4);
+            let bytes =
+                std::slice::from_raw_parts_mut(data.as_mut_ptr() as *mut u8, data.len() * 4);
+            gl.read_pixels(
+                0,
+                0,
+                w as i32,
+                h as i32,
+                glow::RGBA,
+                glow::FLOAT,
+                glow::PixelPackData::Slice(Some(bytes)),
+            );
+            gl.bind_framebuffer(glow::READ_FRAMEBUFFER, None);
+        }
+        let mut texels: Vec<[f32; 4]> = data
+            .chunks_exact(4)
+            .map(|c| [c[0], c[1], c[2], c[3]])
+            .collect();
+        flip_rows(&mut texels, w);
+        texels
+    }
+
+    pub fn delete(&self, gl: &glow::Context) {
+        // SAFETY: called once by the owner.
+        unsafe {
+            gl.delete_framebuffer(self.fbo);
+            gl.delete_texture(self.position);
+            gl.delete_texture(self.normal);
+            gl.delete_texture(self.depth);
+        }
+    }
+}
+
+/// One-channel decision mask drawn over the frame's own depth and stencil.
+pub struct MaskTarget {
+    pub fbo: glow::Framebuffer,
+    mask: glow::Texture,
+    pub width: u32,
+    pub height: u32,
+}
+
+impl MaskTarget {
+    /// Shares `frame`'s depth/stencil texture, so a mask pass tests against the frame's depth.
+    pub fn new(gl: &glow::Context, frame: &Framebuffer) -> Result<MaskTarget, String> {
+        let mask = texture_2d(
+            gl,
+            glow::R8,
+            glow::RED,
+            glow::UNSIGNED_BYTE,
+            frame.width,
+            frame.height,
+        )?;
+        // SAFETY: attaches our texture and the frame's depth/stencil texture.
+        unsafe {
+            let fbo = gl.create_framebuffer()?;
+            gl.bind_framebuffer(glow::FRAMEBUFFER, Some(fbo));
+            gl.framebuffer_texture_2d(
+                glow::FRAMEBUFFER,
+                glow::COLOR_ATTACHMENT0,
+                glow::TEXTURE_2D,
+                Some(mask),
+                0,
+            );
+            gl.framebuffer_texture_2d(
+                glow::FRAMEBUFFER,
+                glow::DEPTH_STENCIL_ATTACHMENT,
+                glow::TEXTURE_2D,
+                Some(frame.depth_stencil),
+                0,
+            );
+            let t = MaskTarget {
+                fbo,
+                mask,
+                width: frame.width,
+                height: frame.height,
+            };
+            let ok = check_complete(gl, "mask");
+            gl.bind_framebuffer(glow::FRAMEBUFFER, None);
+            if let Err(e) = ok {
+                t.delete(gl);
+                return Err(e);
+            }
+            Ok(t)
+        }
+    }
+
+    pub fn bind(&self, gl: &glow::Context) {
+        // SAFETY: the framebuffer is complete.
+        unsafe {
+            gl.bind_framebuffer(glow::FRAMEBUFFER, Some(self.fbo));
+            gl.viewport(0, 0, self.width as i32, self.height as i32);
+        }
+    }
+
+    /// The mask, top row first.
+    pub fn read(&self, gl: &glow::Context) -> Vec<u8> {
+        let (w, h) = (self.width as usize, self.height as usize);
+        let mut data = vec![0u8; w * h];
+        // SAFETY: `data` holds w*h R8 texels; pack alignment 1.
+        unsafe {
+            gl.bind_framebuffer(glow::READ_FRAMEBUFFER, Some(self.fbo));
+            gl.read_buffer(glow::COLOR_ATTACHMENT0);
+            gl.pixel_store_i32(glow::PACK_ALIGNMENT, 1);
+            gl.read_pixels(
+                0,
+                0,
+                w as i32,
+                h as i32,
+                glow::RED,
+                glow::UNSIGNED_BYTE,
+                glow::PixelPackData::Slice(Some(&mut data)),
+            );
+            gl.bind_framebuffer(glow::READ_FRAMEBUFFER, None);
+        }
+        flip_rows(&mut data, w);
+        data
+    }
+
+    pub fn delete(&self, gl: &glow::Context) {
+        // SAFETY: called once by the owner; the shared depth texture belongs to the frame.
+        unsafe {
+            gl.delete_framebuffer(self.fbo);
+            gl.delete_texture(self.mask);
+        }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     #[test]

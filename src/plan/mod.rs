@@ -6,7 +6,7 @@ pub mod frustum;
 
 use crate::options::Options;
 use crate::q3::vis::VisStats;
-use crate::scene::{Scene, SurfaceOwner};
+use crate::scene::{Camera, Scene, SurfaceOwner};
 use crate::shadow::projection;
 use frustum::Frustum;
 use glam::{Mat3, Mat4, Vec3};
@@ -24,9 +24,8 @@ pub struct CameraSetup {
 }
 
 impl CameraSetup {
-    pub fn new(scene: &Scene, width: u32, height: u32) -> CameraSetup {
+    pub fn new(c: &Camera, width: u32, height: u32) -> CameraSetup {
         let aspect = width as f32 / height as f32;
-        let c = &scene.camera;
         let view = c.view();
         // The paper's camera: far plane at infinity (section 4.1), so nothing is ever far-clipped.
         let projection = projection::perspective_infinite(c.fov_y(aspect), aspect, c.near);
@@ -69,8 +68,14 @@ pub struct Plan {
 }
 
 impl Plan {
+    /// The plan for the scene's own camera.
     pub fn build(scene: &Scene, options: &Options) -> Plan {
-        let camera = CameraSetup::new(scene, options.width, options.height);
+        Plan::build_at(scene, &scene.camera, options)
+    }
+
+    /// The plan for `camera` (a camera path's frame, the viewer's camera).
+    pub fn build_at(scene: &Scene, camera: &Camera, options: &Options) -> Plan {
+        let camera = CameraSetup::new(camera, options.width, options.height);
         let frustum = options
             .culling
             .frustum

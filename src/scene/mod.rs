@@ -8,6 +8,7 @@ pub mod builtin;
 pub mod camera;
 pub mod file;
 pub mod light;
+pub mod path;
 pub mod shapes;
 
 pub use camera::Camera;

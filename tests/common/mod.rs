@@ -80,3 +80,46 @@ pub fn load_scene_file(name: &str) -> (Scene, shadowlab::scene::file::LoadReport
     let (scene, report) = file.build(&options).unwrap_or_else(|e| panic!("{e}"));
     (scene, report, options)
 }
+
+/// A scene from world-space meshes with their materials, lights and a camera.
+pub fn scene_of(
+    parts: Vec<(
+        shadowlab::scene::shapes::MeshData,
+        shadowlab::scene::Material,
+    )>,
+    lights: Vec<shadowlab::scene::Light>,
+    camera: shadowlab::scene::Camera,
+) -> Scene {
+    let mut scene = Scene {
+        name: "test".into(),
+        lights,
+        camera,
+        ..Scene::default()
+    };
+    for (mesh, material) in parts {
+        scene.materials.push(material);
+        let m = scene.materials.len() - 1;
+        scene.push_surface(
+            &mesh.vertices,
+            &mesh.indices,
+            m,
+            shadowlab::scene::SurfaceOwner::World,
+            shadowlab::scene::SurfaceKind::Mesh,
+        );
+    }
+    scene
+}
+
+/// A horizontal square quad centred at (cx, cy) at height z, facing +Z.
+pub fn floor_quad(cx: f32, cy: f32, half: f32, z: f32) -> shadowlab::scene::shapes::MeshData {
+    use glam::Vec3;
+    let mut m = shadowlab::scene::shapes::MeshData::default();
+    m.quad(
+        Vec3::new(cx - half, cy - half, z),
+        Vec3::new(cx + half, cy - half, z),
+        Vec3::new(cx + half, cy + half, z),
+        Vec3::new(cx - half, cy + half, z),
+        [1.0, 1.0],
+    );
+    m
+}

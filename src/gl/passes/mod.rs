@@ -2,6 +2,7 @@
 //! nothing for the next pass to assume.
 
 pub mod base;
+pub mod gbuffer;
 pub mod lit;
 
 use super::program::Program;

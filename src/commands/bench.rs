@@ -1,0 +1,105 @@
+//! `shadowlab bench`: frame time and accuracy of a sweep of options, as a table, JSON and a plot.
+
+use super::{CommonArgs, load, start_gl};
+use anyhow::{Context, Result, bail};
+use shadowlab::report::bench::{Bench, BenchSettings, sweep_configs};
+use shadowlab::report::{plot, table};
+use shadowlab::scene::path::{self, TURN_FRAMES};
+use std::path::PathBuf;
+
+#[derive(clap::Args)]
+pub struct Args {
+    /// Scene file (TOML); the built-in scene when absent.
+    #[arg(long)]
+    scene: Option<PathBuf>,
+    /// A swept option, `key=v1,v2,...` (repeatable; every combination is measured).
+    #[arg(long = "sweep", value_name = "KEY=V1,V2,...")]
+    sweeps: Vec<String>,
+    /// Unmeasured frames before each configuration.
+    #[arg(long, default_value_t = 3)]
+    warmup: usize,
+    /// Measured frames per configuration (default: 10, or one lap of --path).
+    #[arg(long)]
+    frames: Option<usize>,
+    /// Camera path: `turn` (360° in place over 128 frames, DarkPlaces' timerefresh) or a
+    /// recorded path file (`x y z yaw pitch` per line); the scene's camera when absent.
+    #[arg(long)]
+    path: Option<String>,
+    /// Write the rows as a JSON array.
+    #[arg(long)]
+    json: Option<PathBuf>,
+    /// Write the error-against-time plot (default: the JSON file's name with .png, else
+    /// bench.png).
+    #[arg(long)]
+    plot: Option<PathBuf>,
+}
+
+fn parse_sweep(s: &str) -> Result<(String, Vec<String>)> {
+    let (key, values) = s
+        .split_once('=')
+        .with_context(|| format!("--sweep `{s}` is not KEY=V1,V2,..."))?;
+    let values: Vec<String> = values
+        .split(',')
+        .map(|v| v.trim().to_string())
+        .filter(|v| !v.is_empty())
+        .collect();
+    if values.is_empty() {
+        bail!("--sweep `{s}` has no values");
+    }
+    Ok((key.trim().to_string(), values))
+}
+
+pub fn run(common: &CommonArgs, args: &Args) -> Result<()> {
+    let sweeps: Vec<(String, Vec<String>)> = args
+        .sweeps
+        .iter()
+        .map(|s| parse_sweep(s))
+        .collect::<Result<_>>()?;
+    let loaded = load(common, args.scene.as_deref())?;
+    let (scene, options) = (loaded.scene, loaded.options);
+    let configs = sweep_configs(&options, &sweeps)?;
+    let keys = match args.path.as_deref() {
+        None => vec![path::PathKey::of(&scene.camera)],
+        Some("turn") => path::turn(&scene.camera, TURN_FRAMES),
+        Some(file) => path::read(std::path::Path::new(file))?,
+    };
+    let frames = args
+        .frames
+        .unwrap_or(if args.path.is_some() { keys.len() } else { 10 });
+    let (_ctx, mut renderer) = start_gl(&options)?;
+    renderer.load_scene(&scene)?;
+    eprintln!(
+        "bench: {} configuration(s) on {} ({} triangles, {} lights), {} warm-up + {} measured frames each, {}",
+        configs.len(),
+        scene.name,
+        scene.triangle_count(),
+        scene.lights.len(),
+        args.warmup,
+        frames,
+        renderer.caps.renderer
+    );
+    let settings = BenchSettings {
+        warmup: args.warmup,
+        frames,
+        path: keys,
+        progress: true,
+    };
+    let rows = Bench::new(&mut renderer, &scene, settings).run(&configs)?;
+    println!("{}", table::markdown(&rows));
+    if let Some(json) = &args.json {
+        std::fs::write(json, serde_json::to_string_pretty(&rows)?)
+            .with_context(|| format!("cannot write {}", json.display()))?;
+        eprintln!("wrote {}", json.display());
+    }
+    let plot_path = args.plot.clone().unwrap_or_else(|| match &args.json {
+        Some(j) => j.with_extension("png"),
+        None => PathBuf::from("bench.png"),
+    });
+    let title = format!(
+        "{}: error against frame time ({}x{})",
+        scene.name, options.width, options.height
+    );
+    plot::error_vs_time(&rows, &title, &plot_path).map_err(anyhow::Error::msg)?;
+    eprintln!("wrote {}", plot_path.display());
+    Ok(())
+}

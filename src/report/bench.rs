@@ -1,0 +1,379 @@
+//! Benchmarks: frame time and accuracy of each configuration of a sweep, in one run.
+//!
+//! Each configuration renders `warmup` frames, then `frames` measured frames along the camera path
+//! (cycled). Its frame time is reported absolutely and as a ratio to the same options with shadows
+//! off (technique = none), measured in the same run. Its error is measured once, on the path's
+//! first frame, against the exact reference (which is computed once per view and light and
+//! reused by every configuration).
+
+use crate::frame::{Frame, Mask};
+use crate::gl::{FrameRequest, RenderError, Renderer};
+use crate::options::{OptionError, Options, Technique};
+use crate::scene::Scene;
+use crate::scene::path::PathKey;
+use crate::truth::{self, Counts, Reference, Tracing};
+use indicatif::{ProgressBar, ProgressStyle};
+use serde::Serialize;
+use std::collections::{BTreeMap, HashMap};
+
+/// How frames are taken.
+#[derive(Debug, Clone)]
+pub struct BenchSettings {
+    pub warmup: usize,
+    pub frames: usize,
+    /// Camera poses, cycled through by the measured frames.
+    pub path: Vec<PathKey>,
+    pub progress: bool,
+}
+
+/// One point of a sweep.
+#[derive(Debug, Clone)]
+pub struct BenchConfig {
+    /// The swept keys and their values, e.g. `shadow_map.size=512`.
+    pub swept: BTreeMap<String, String>,
+    pub options: Options,
+}
+
+impl BenchConfig {
+    pub fn label(&self) -> String {
+        if self.swept.is_empty() {
+            return format!("technique={}", self.options.technique);
+        }
+        self.swept
+            .iter()
+            .map(|(k, v)| format!("{k}={v}"))
+            .collect::<Vec<_>>()
+            .join(" ")
+    }
+}
+
+/// Every combination of the swept values over `base` (the first sweep varies slowest).
+pub fn sweep_configs(
+    base: &Options,
+    sweeps: &[(String, Vec<String>)],
+) -> Result<Vec<BenchConfig>, OptionError> {
+    let mut configs = vec![BenchConfig {
+        swept: BTreeMap::new(),
+        options: base.clone(),
+    }];
+    for (key, values) in sweeps {
+        let mut next = Vec::with_capacity(configs.len() * values.len());
+        for c in &configs {
+            for v in values {
+                let mut o = c.options.clone();
+                o.set(key, v)?;
+                let mut swept = c.swept.clone();
+                swept.insert(key.clone(), o.get(key)?);
+                next.push(BenchConfig { swept, options: o });
+            }
+        }
+        configs = next;
+    }
+    Ok(configs)
+}
+
+#[derive(Debug, Clone, Copy, Default, PartialEq, Serialize)]
+pub struct MsStats {
+    pub median: f64,
+    pub min: f64,
+    pub max: f64,
+}
+
+#[derive(Debug, Clone, Copy, Default, PartialEq, Serialize)]
+pub struct Median {
+    pub median: f64,
+}
+
+fn median(v: &mut [f64]) -> f64 {
+    if v.is_empty() {
+        return 0.0;
+    }
+    v.sort_by(|a, b| a.total_cmp(b));
+    let n = v.len();
+    if n % 2 == 1 {
+        v[n / 2]
+    } else {
+        0.5 * (v[n / 2 - 1] + v[n / 2])
+    }
+}
+
+fn stats(v: &[f64]) -> MsStats {
+    let mut s = v.to_vec();
+    MsStats {
+        median: median(&mut s),
+        min: s.first().copied().unwrap_or(0.0),
+        max: s.last().copied().unwrap_or(0.0),
+    }
+}
+
+/// Error against the exact reference, as fractions of receiver pixels.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Serialize)]
+pub struct ErrorRow {
+    pub receiver_pixels: usize,
+    pub false_shadow: f64,
+    pub false_lit: f64,
+    pub total: f64,
+    pub total_excl_boundary: f64,
+    pub receiver_mismatch: usize,
+}
+
+impl From<&Counts> for ErrorRow {
+    fn from(c: &Counts) -> Self {
+        let r = c.rates();
+        ErrorRow {
+            receiver_pixels: r.receiver_pixels,
+            false_shadow: r.false_shadow,
+            false_lit: r.false_lit,
+            total: r.total,
+            total_excl_boundary: r.total_excl_boundary,
+            receiver_mismatch: c.receiver_mismatch,
+        }
+    }
+}
+
+/// One configuration's results (a row of the JSON array).
+#[derive(Debug, Clone, Serialize)]
+pub struct BenchRow {
+    pub scene: String,
+    pub technique: String,
+    pub label: String,
+    pub swept: BTreeMap<String, String>,
+    pub options: Options,
+    pub width: u32,
+    pub height: u32,
+    pub lights: usize,
+    pub frames: usize,
+    pub frame_ms: MsStats,
+    pub shadows_off_frame_ms: Median,
+    pub ratio_to_shadows_off: f64,
+    /// Median milliseconds of each pass over the measured frames; `lights.<stage>` sums a stage
+    /// over all lights of a frame.
+    pub pass_ms: BTreeMap<String, f64>,
+    /// `gpu` (timer queries) or `cpu` (wall time around glFinish).
+    pub clock: String,
+    pub error: ErrorRow,
+    pub error_per_light: Vec<(usize, ErrorRow)>,
+}
+
+/// Sums per-light passes into `lights.<stage>` entries, next to the passes themselves.
+pub fn pass_totals(frame: &Frame) -> BTreeMap<String, f64> {
+    let mut out = BTreeMap::new();
+    for p in &frame.passes {
+        *out.entry(p.name.clone()).or_insert(0.0) += p.ms;
+        if let Some((light, stage)) = p.name.split_once('.')
+            && light.starts_with("light")
+        {
+            *out.entry(format!("lights.{stage}")).or_insert(0.0) += p.ms;
+        }
+    }
+    out
+}
+
+struct Measured {
+    frame_ms: Vec<f64>,
+    passes: BTreeMap<String, Vec<f64>>,
+    clock: &'static str,
+}
+
+/// Runs a sweep on one loaded scene.
+pub struct Bench<'a> {
+    renderer: &'a mut Renderer,
+    scene: &'a Scene,
+    settings: BenchSettings,
+    reference: Option<Reference>,
+    /// Exact masks by (width, height, light).
+    reference_masks: HashMap<(u32, u32, usize), Mask>,
+    baselines: HashMap<String, f64>,
+}
+
+impl<'a> Bench<'a> {
+    pub fn new(renderer: &'a mut Renderer, scene: &'a Scene, settings: BenchSettings) -> Bench<'a> {
+        Bench {
+            renderer,
+            scene,
+            settings,
+            reference: None,
+            reference_masks: HashMap::new(),
+            baselines: HashMap::new(),
+        }
+    }
+
+    fn measure(&mut self, options: &Options) -> Result<Measured, RenderError> {
+        let path = &self.settings.path;
+        let camera = |i: usize| path[i % path.len()].apply(&self.scene.camera);
+        for _ in 0..self.settings.warmup {
+            self.renderer
+                .render_at(self.scene, &camera(0), options, FrameRequest::default())?;
+        }
+        let mut m = Measured {
+            frame_ms: Vec::new(),
+            passes: BTreeMap::new(),
+            clock: "cpu",
+        };
+        for i in 0..self.settings.frames.max(1) {
+            let f = self.renderer.render_at(
+                self.scene,
+                &camera(i),
+                options,
+                FrameRequest::default(),
+            )?;
+            m.frame_ms.push(f.frame_ms);
+            for (name, ms) in pass_totals(&f) {
+                m.passes.entry(name).or_default().push(ms);
+            }
+            if f.passes.iter().any(|p| p.clock == "gpu") {
+                m.clock = "gpu";
+            }
+        }
+        Ok(m)
+    }
+
+    fn baseline_key(options: &Options) -> String {
+        let mut off = options.clone();
+        off.technique = Technique::None;
+        serde_json::to_string(&off).unwrap_or_default()
+    }
+
+    /// Median frame time of `options` with shadows off, measured once per distinct options.
+    fn baseline(&mut self, options: &Options) -> Result<f64, RenderError> {
+        let key = Self::baseline_key(options);
+        if let Some(&ms) = self.baselines.get(&key) {
+            return Ok(ms);
+        }
+        let mut off = options.clone();
+        off.technique = Technique::None;
+        let ms = median(&mut self.measure(&off)?.frame_ms);
+        self.baselines.insert(key, ms);
+        Ok(ms)
+    }
+
+    /// Error of `options` on the first frame of the path.
+    fn error(&mut self, options: &Options) -> Result<(Counts, Vec<(usize, Counts)>), RenderError> {
+        let camera = self.settings.path[0].apply(&self.scene.camera);
+        let frame =
+            self.renderer
+                .render_at(self.scene, &camera, options, FrameRequest { masks: true })?;
+        let gbuffer = frame
+            .gbuffer
+            .as_ref()
+            .ok_or(RenderError::Gl("the renderer returned no G-buffer".into()))?;
+        let reference = self
+            .reference
+            .get_or_insert_with(|| Reference::build(self.scene));
+        let mut total = Counts::default();
+        let mut per_light = Vec::new();
+        for mask in &frame.masks {
+            let key = (frame.width, frame.height, mask.light);
+            let exact = self.reference_masks.entry(key).or_insert_with(|| {
+                truth::reference_mask(
+                    reference,
+                    gbuffer,
+                    &self.scene.lights[mask.light],
+                    mask.light,
+                    Tracing::Bvh,
+                )
+            });
+            let c = truth::compare(mask, exact);
+            total.add(&c);
+            per_light.push((mask.light, c));
+        }
+        Ok((total, per_light))
+    }
+
+    /// Measures every configuration.
+    pub fn run(&mut self, configs: &[BenchConfig]) -> Result<Vec<BenchRow>, RenderError> {
+        let bar = if self.settings.progress {
+            let b = ProgressBar::new(configs.len() as u64);
+            b.set_style(
+                ProgressStyle::with_template("{bar:30} {pos}/{len} configurations  {msg}")
+                    .unwrap_or_else(|_| ProgressStyle::default_bar()),
+            );
+            b
+        } else {
+            ProgressBar::hidden()
+        };
+        let mut rows = Vec::with_capacity(configs.len());
+        for c in configs {
+            bar.set_message(c.label());
+            // A configuration without shadows is its own baseline.
+            let (off_ms, m) = if c.options.technique == Technique::None {
+                let m = self.measure(&c.options)?;
+                let ms = median(&mut m.frame_ms.clone());
+                self.baselines.insert(Self::baseline_key(&c.options), ms);
+                (ms, m)
+            } else {
+                let off = self.baseline(&c.options)?;
+                (off, self.measure(&c.options)?)
+            };
+            let (total, per_light) = self.error(&c.options)?;
+            let frame_ms = stats(&m.frame_ms);
+            rows.push(BenchRow {
+                scene: self.scene.name.clone(),
+                technique: c.options.technique.to_string(),
+                label: c.label(),
+                swept: c.swept.clone(),
+                options: c.options.clone(),
+                width: c.options.width,
+                height: c.options.height,
+                lights: per_light.len(),
+                frames: m.frame_ms.len(),
+                frame_ms,
+                shadows_off_frame_ms: Median { median: off_ms },
+                ratio_to_shadows_off: if off_ms > 0.0 {
+                    frame_ms.median / off_ms
+                } else {
+                    0.0
+                },
+                pass_ms: m
+                    .passes
+                    .into_iter()
+                    .map(|(k, mut v)| (k, median(&mut v)))
+                    .collect(),
+                clock: m.clock.to_string(),
+                error: ErrorRow::from(&total),
+                error_per_light: per_light
+                    .iter()
+                    .map(|(l, c)| (*l, ErrorRow::from(c)))
+                    .collect(),
+            });
+            bar.inc(1);
+        }
+        bar.finish_and_clear();
+        Ok(rows)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn sweeps_are_a_cartesian_product_in_order() {
+        let configs = sweep_configs(
+            &Options::default(),
+            &[
+                ("width".into(), vec!["320".into(), "640".into()]),
+                (
+                    "lighting.ambient".into(),
+                    vec!["0.1".into(), "0.3".into(), "0.5".into()],
+                ),
+            ],
+        )
+        .unwrap();
+        assert_eq!(configs.len(), 6);
+        assert_eq!(configs[0].options.width, 320);
+        assert_eq!(configs[2].options.lighting.ambient, 0.5);
+        assert_eq!(configs[3].options.width, 640);
+        assert_eq!(configs[4].label(), "lighting.ambient=0.3 width=640");
+        assert!(sweep_configs(&Options::default(), &[("nope".into(), vec!["1".into()])]).is_err());
+    }
+
+    #[test]
+    fn medians_and_stats() {
+        assert_eq!(median(&mut [3.0, 1.0, 2.0]), 2.0);
+        assert_eq!(median(&mut [4.0, 1.0, 2.0, 3.0]), 2.5);
+        assert_eq!(median(&mut []), 0.0);
+        let s = stats(&[5.0, 1.0, 3.0]);
+        assert_eq!((s.median, s.min, s.max), (3.0, 1.0, 5.0));
+    }
+}

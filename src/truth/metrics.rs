@@ -1,0 +1,193 @@
+//! How far a renderer's masks are from the exact ones.
+//!
+//! Rates are fractions of the reference's receiver pixels. False shadow = the renderer shadows a
+//! pixel the reference lights (acne, over-darkening); false lit = the renderer lights a pixel the
+//! reference shadows (light leaks, peter panning). The `_excl_boundary` rates leave out pixels
+//! within 1 px of a reference shadow boundary (a pixel whose 3×3 neighbourhood holds both lit and
+//! shadowed reference receivers), where rasterization alone decides. Pixels that one side counts
+//! as a receiver and the other does not (cone edges, terminators, at float precision) are counted
+//! apart as `receiver_mismatch` and left out of the rates.
+
+use crate::frame::{Mask, MaskValue};
+use serde::Serialize;
+
+/// Counts for one light (or summed over lights).
+#[derive(Debug, Clone, Copy, Default, PartialEq, Serialize)]
+pub struct Counts {
+    pub receiver_pixels: usize,
+    pub reference_shadowed: usize,
+    pub false_shadow: usize,
+    pub false_lit: usize,
+    /// Receivers away from the boundary band.
+    pub receivers_excl_boundary: usize,
+    pub false_shadow_excl_boundary: usize,
+    pub false_lit_excl_boundary: usize,
+    pub receiver_mismatch: usize,
+}
+
+/// Rates as fractions of receiver pixels (0 when there are none).
+#[derive(Debug, Clone, Copy, Default, PartialEq, Serialize)]
+pub struct Rates {
+    pub receiver_pixels: usize,
+    pub false_shadow: f64,
+    pub false_lit: f64,
+    pub total: f64,
+    pub total_excl_boundary: f64,
+}
+
+fn ratio(a: usize, b: usize) -> f64 {
+    if b == 0 { 0.0 } else { a as f64 / b as f64 }
+}
+
+impl Counts {
+    pub fn add(&mut self, o: &Counts) {
+        self.receiver_pixels += o.receiver_pixels;
+        self.reference_shadowed += o.reference_shadowed;
+        self.false_shadow += o.false_shadow;
+        self.false_lit += o.false_lit;
+        self.receivers_excl_boundary += o.receivers_excl_boundary;
+        self.false_shadow_excl_boundary += o.false_shadow_excl_boundary;
+        self.false_lit_excl_boundary += o.false_lit_excl_boundary;
+        self.receiver_mismatch += o.receiver_mismatch;
+    }
+
+    pub fn rates(&self) -> Rates {
+        Rates {
+            receiver_pixels: self.receiver_pixels,
+            false_shadow: ratio(self.false_shadow, self.receiver_pixels),
+            false_lit: ratio(self.false_lit, self.receiver_pixels),
+            total: ratio(self.false_shadow + self.false_lit, self.receiver_pixels),
+            total_excl_boundary: ratio(
+                self.false_shadow_excl_boundary + self.false_lit_excl_boundary,
+                self.receivers_excl_boundary,
+            ),
+        }
+    }
+}
+
+/// Whether pixel `i` lies within 1 px of a boundary between lit and shadowed reference pixels.
+fn near_boundary(reference: &Mask, x: u32, y: u32) -> bool {
+    let (mut lit, mut shadowed) = (false, false);
+    for yy in y.saturating_sub(1)..=(y + 1).min(reference.height - 1) {
+        for xx in x.saturating_sub(1)..=(x + 1).min(reference.width - 1) {
+            match reference.get(xx, yy) {
+                MaskValue::Lit => lit = true,
+                MaskValue::Shadowed => shadowed = true,
+                MaskValue::NotReceiver => {}
+            }
+        }
+    }
+    lit && shadowed
+}
+
+/// Compares one light's renderer mask with the reference mask of the same light and frame.
+pub fn compare(rendered: &Mask, reference: &Mask) -> Counts {
+    assert_eq!(
+        (rendered.width, rendered.height),
+        (reference.width, reference.height),
+        "masks of different sizes"
+    );
+    let mut c = Counts::default();
+    for y in 0..reference.height {
+        for x in 0..reference.width {
+            let (r, t) = (rendered.get(x, y), reference.get(x, y));
+            match (r, t) {
+                (MaskValue::NotReceiver, MaskValue::NotReceiver) => continue,
+                (MaskValue::NotReceiver, _) | (_, MaskValue::NotReceiver) => {
+                    c.receiver_mismatch += 1;
+                    continue;
+                }
+                _ => {}
+            }
+            c.receiver_pixels += 1;
+            c.reference_shadowed += (t == MaskValue::Shadowed) as usize;
+            let false_shadow = r == MaskValue::Shadowed && t == MaskValue::Lit;
+            let false_lit = r == MaskValue::Lit && t == MaskValue::Shadowed;
+            c.false_shadow += false_shadow as usize;
+            c.false_lit += false_lit as usize;
+            if !near_boundary(reference, x, y) {
+                c.receivers_excl_boundary += 1;
+                c.false_shadow_excl_boundary += false_shadow as usize;
+                c.false_lit_excl_boundary += false_lit as usize;
+            }
+        }
+    }
+    c
+}
+
+/// RGBA image of one light's errors: red = false shadow, blue = false lit, grey = correct lit,
+/// dark grey = correct shadow, black = not a receiver, yellow = receiver mismatch.
+pub fn error_image(rendered: &Mask, reference: &Mask) -> Vec<u8> {
+    let mut out = Vec::with_capacity(reference.values.len() * 4);
+    for (&r, &t) in rendered.values.iter().zip(&reference.values) {
+        let px: [u8; 4] = match (MaskValue::from_u8(r), MaskValue::from_u8(t)) {
+            (MaskValue::NotReceiver, MaskValue::NotReceiver) => [0, 0, 0, 255],
+            (MaskValue::NotReceiver, _) | (_, MaskValue::NotReceiver) => [255, 220, 0, 255],
+            (MaskValue::Shadowed, MaskValue::Lit) => [255, 0, 0, 255],
+            (MaskValue::Lit, MaskValue::Shadowed) => [0, 80, 255, 255],
+            (MaskValue::Lit, MaskValue::Lit) => [150, 150, 150, 255],
+            (MaskValue::Shadowed, MaskValue::Shadowed) => [60, 60, 60, 255],
+        };
+        out.extend_from_slice(&px);
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn mask(rows: &[&str]) -> Mask {
+        let values = rows
+            .iter()
+            .flat_map(|r| {
+                r.bytes().map(|b| match b {
+                    b'L' => 1,
+                    b'S' => 2,
+                    _ => 0,
+                })
+            })
+            .collect();
+        Mask {
+            light: 0,
+            width: rows[0].len() as u32,
+            height: rows.len() as u32,
+            values,
+        }
+    }
+
+    #[test]
+    fn counts_and_rates_by_hand() {
+        let reference = mask(&["LLLLSS", "LLLLSS", "LLLLSS", ".LLLLL"]);
+        let rendered = mask(&["SLLLLS", "LLLLSS", "LLLLSS", "LLLLL."]);
+        let c = compare(&rendered, &reference);
+        // 24 pixels; (0,3) and (5,3) are a receiver on one side only.
+        assert_eq!(c.receiver_mismatch, 2);
+        assert_eq!(c.receiver_pixels, 22);
+        assert_eq!(c.reference_shadowed, 6);
+        assert_eq!(c.false_shadow, 1); // (0,0)
+        assert_eq!(c.false_lit, 1); // (4,0)
+        // (4,0) touches the boundary (lit and shadowed neighbours); (0,0) does not.
+        assert_eq!(c.false_shadow_excl_boundary, 1);
+        assert_eq!(c.false_lit_excl_boundary, 0);
+        let r = c.rates();
+        assert!((r.total - 2.0 / 22.0).abs() < 1e-12);
+        // The band: columns 3-4 of every row, and (5,2) whose neighbours below are lit.
+        assert_eq!(c.receivers_excl_boundary, 22 - 9);
+        assert!((r.total_excl_boundary - 1.0 / 13.0).abs() < 1e-12);
+    }
+
+    #[test]
+    fn identical_masks_have_no_error_and_the_image_colours_errors() {
+        let m = mask(&["LS.", "SL."]);
+        let c = compare(&m, &m);
+        assert_eq!(
+            (c.false_shadow, c.false_lit, c.receiver_mismatch),
+            (0, 0, 0)
+        );
+        assert_eq!(c.rates().total, 0.0);
+        let img = error_image(&mask(&["SL"]), &mask(&["LS"]));
+        assert_eq!(&img[0..4], &[255, 0, 0, 255]);
+        assert_eq!(&img[4..8], &[0, 80, 255, 255]);
+    }
+}

@@ -1,0 +1,9 @@
+//! The exact reference and the error measured against it (GL-free).
+
+pub mod masks;
+pub mod metrics;
+pub mod reference;
+
+pub use masks::{Tracing, reference_mask};
+pub use metrics::{Counts, Rates, compare, error_image};
+pub use reference::Reference;
