@@ -1,5 +1,9 @@
 // One light's additive pass (glBlendFunc(GL_ONE, GL_ONE)): diffuse with spot cone and distance
-// falloff. Fragments the light cannot reach are discarded, so they add nothing.
+// falloff, and the shadow technique's decision. Fragments the light cannot reach are discarded.
+//
+// Defines: SHADOW_MAP (shadow.glsl is prepended), RESULT_ALPHA (the compare result goes to alpha
+// and glAlphaFunc decides; otherwise it scales the light, INTENSITY), MASK_OUTPUT (write the
+// decision instead of light).
 in vec3 v_world;
 in vec3 v_normal;
 in vec2 v_uv;
@@ -15,10 +19,36 @@ uniform float u_cos_cutoff;   // -1 for omni lights
 uniform float u_cos_inner;    // where the cone edge starts to soften
 uniform float u_radius;
 
+#ifdef SHADOW_MAP
+in vec4 v_shadow;
+uniform int u_face;           // six-spot omni light: the cube face this pass lights; -1: all
+uniform int u_sm_alpha_func;  // glAlphaFunc emulation: 0 NEVER .. 7 ALWAYS (options AlphaTestFunc)
+uniform float u_sm_alpha_ref;
+
+// The face whose axis is the major axis of d; ties go to x, then y (shadow/views.rs major_face).
+int major_face(vec3 d) {
+    vec3 a = abs(d);
+    if (a.x >= a.y && a.x >= a.z) return d.x >= 0.0 ? 0 : 1;
+    if (a.y >= a.z) return d.y >= 0.0 ? 2 : 3;
+    return d.z >= 0.0 ? 4 : 5;
+}
+
+bool alpha_test(int func, float a, float ref) {
+    if (func == 0) return false;
+    if (func == 1) return a < ref;
+    if (func == 2) return a == ref;
+    if (func == 3) return a <= ref;
+    if (func == 4) return a > ref;
+    if (func == 5) return a != ref;
+    if (func == 6) return a >= ref;
+    return true;
+}
+#endif
+
 #ifdef MASK_OUTPUT
 // Mask pass: write the decision instead of light (frame::MaskValue / 255): 1 lit, 2 shadowed.
 // u_mask_value forces it (stencil-based techniques decide by the stencil test): 0 = from
-// the shader's own visibility.
+// the shader's own decision.
 uniform int u_mask_value;
 #endif
 
@@ -39,12 +69,36 @@ void main() {
         ? smoothstep(u_cos_cutoff, u_cos_inner, dot(-l, u_spot_dir))
         : 1.0;
     float diffuse = max(dot(n, l), 0.0) * falloff * cone;
+
     // Fraction of the light that reaches the fragment (1 without a shadow technique).
     float visibility = 1.0;
+#ifdef SHADOW_MAP
+    if (u_face >= 0 && major_face(v_world - u_light_pos) != u_face) discard;
+#ifdef SHADOW_CUBE
+    visibility = shadow_visibility_cube(v_world - u_light_pos);
+#else
+    visibility = shadow_visibility(v_shadow);
+#endif
+#endif
+
+#ifdef RESULT_ALPHA
+    // DEPTH_TEXTURE_MODE ALPHA: the result lands in alpha and the alpha test keeps or rejects the
+    // fragment; the light itself is not scaled.
+    bool lit = alpha_test(u_sm_alpha_func, visibility, u_sm_alpha_ref);
+    float scale = 1.0;
+#else
+    // INTENSITY: the result scales the light; the mask calls it lit at one half or more.
+    bool lit = visibility >= 0.5;
+    float scale = visibility;
+#endif
+
 #ifdef MASK_OUTPUT
-    int decision = u_mask_value != 0 ? u_mask_value : (visibility >= 0.5 ? 1 : 2);
+    int decision = u_mask_value != 0 ? u_mask_value : (lit ? 1 : 2);
     o_color = vec4(float(decision) / 255.0, 0.0, 0.0, 1.0);
 #else
-    o_color = vec4(albedo.rgb * u_light_color * diffuse * visibility, 1.0);
+#ifdef RESULT_ALPHA
+    if (!lit) discard;
+#endif
+    o_color = vec4(albedo.rgb * u_light_color * diffuse * scale, 1.0);
 #endif
 }

@@ -1,6 +1,7 @@
 // Every camera pass draws the world with this vertex stage, so depth is bit-identical across the
 // unlit and lit passes (`invariant`): the lit pass's LEQUAL test then passes exactly where the
-// unlit pass wrote, which is what the paper's passes rely on.
+// unlit pass wrote, which is what the paper's passes rely on. Clip planes (CLIP_PLANES) change
+// which polygons are rasterized, not this computation: that is paper Fig. 1's anomaly.
 layout(location = 0) in vec3 a_position;
 layout(location = 1) in vec3 a_normal;
 layout(location = 2) in vec2 a_uv;
@@ -17,6 +18,19 @@ out vec2 v_uv;
 out vec2 v_lightmap_uv;
 out vec3 v_color;
 
+#ifdef SHADOW_MAP
+// glTexGen(EYE_LINEAR) with planes T = B * P_light * V_light * inverse(V_camera), specified while
+// the camera's modelview is loaded: applied to eye coordinates it gives (s, t, r, q).
+uniform mat4 u_view;    // world -> camera eye
+uniform mat4 u_texgen;
+out vec4 v_shadow;
+#endif
+
+#ifdef CLIP_PLANES
+uniform vec4 u_clip_planes[4]; // the light frustum's sides, world space, inside >= 0
+out float gl_ClipDistance[4];  // sized, so a loop may index it (GLSL 3.30)
+#endif
+
 invariant gl_Position;
 
 void main() {
@@ -26,5 +40,11 @@ void main() {
     v_uv = a_uv;
     v_lightmap_uv = a_lightmap_uv;
     v_color = a_color.rgb;
+#ifdef SHADOW_MAP
+    v_shadow = u_texgen * (u_view * world);
+#endif
+#ifdef CLIP_PLANES
+    for (int i = 0; i < 4; i++) gl_ClipDistance[i] = dot(u_clip_planes[i], world);
+#endif
     gl_Position = u_view_proj * world;
 }

@@ -279,6 +279,132 @@ option_enum! {
     pub enum Technique {
         /// No shadows: every receiver is lit (the base renderer, paper section 2).
         None = "none",
+        /// Shadow mapping (paper section 3).
+        ShadowMap = "shadow_map",
+    }
+}
+
+option_enum! {
+    /// Where a shadow map's depth values come from.
+    pub enum DepthSource {
+        /// Draw the light's view into the frame's own depth buffer, then glCopyTexSubImage2D into
+        /// the light's depth texture (the paper: its card had no pbuffers).
+        Copy = "copy",
+        /// Render straight into the depth texture through a framebuffer object (thesis 2.2.10's
+        /// pbuffer path).
+        Fbo = "fbo",
+    }
+}
+
+option_enum! {
+    /// Depth texture precision.
+    pub enum DepthBits {
+        /// DEPTH_COMPONENT24 (the paper).
+        D24 = "24",
+        D16 = "16",
+        /// DEPTH_COMPONENT32F (the frame's depth buffer becomes 32F too, so copies keep it).
+        D32f = "32f",
+    }
+}
+
+option_enum! {
+    /// How the stored depth is compared with the fragment's light-space depth.
+    pub enum Compare {
+        /// sampler2DShadow with COMPARE_REF_TO_TEXTURE and LEQUAL (ARB_shadow).
+        Hardware = "hardware",
+        /// A plain depth fetch compared in the shader.
+        Shader = "shader",
+    }
+}
+
+option_enum! {
+    /// Where the compare result goes (ARB_depth_texture's DEPTH_TEXTURE_MODE).
+    pub enum CompareResult {
+        /// ALPHA, then the alpha test rejects shadowed fragments (the paper).
+        Alpha = "alpha",
+        /// INTENSITY: the light is multiplied by the result (thesis 2.2.6).
+        Intensity = "intensity",
+    }
+}
+
+option_enum! {
+    /// glAlphaFunc's comparison, emulated in the shader.
+    pub enum AlphaTestFunc {
+        Never = "never",
+        Less = "less",
+        Equal = "equal",
+        Lequal = "lequal",
+        Greater = "greater",
+        Notequal = "notequal",
+        Gequal = "gequal",
+        Always = "always",
+    }
+}
+
+option_enum! {
+    /// Filtering of the compare.
+    pub enum Filter {
+        /// One compare at the nearest texel (the paper).
+        Nearest = "nearest",
+        /// LINEAR filtering of the compare: the hardware's 2x2 percentage-closer filter.
+        Hw2x2 = "hw2x2",
+        /// Nine compares at the texel and its eight neighbours, averaged (paper 3.1).
+        Pcf3x3 = "pcf3x3",
+        /// N x N compares (N = shadow_map.pcf_size), averaged.
+        Pcf = "pcf",
+    }
+}
+
+option_enum! {
+    /// Which passes glPolygonOffset applies to.
+    pub enum OffsetPass {
+        /// Push the shadow map away from the light (thesis 2.2.8).
+        ShadowMap = "shadow_map",
+        /// Pull the lit pass toward the camera (the paper's "offset the polygons" of section 3.1).
+        Lit = "lit",
+        Both = "both",
+    }
+}
+
+option_enum! {
+    /// What happens to points the light reaches that lie outside a shadow map's frustum.
+    pub enum Outside {
+        /// s and t clamp to the map's edge texels (GL_CLAMP; the artifact).
+        Clamp = "clamp",
+        /// A texgen range test: outside [0,1] no compare is made (the point is unshadowed).
+        Range = "range",
+        /// The light's frustum planes clip the lit pass (gl_ClipDistance; paper Fig. 1 anomalies).
+        ClipPlanes = "clip_planes",
+    }
+}
+
+option_enum! {
+    /// Which faces of casters are drawn into the shadow map.
+    pub enum CasterFaces {
+        /// Faces toward the light (back-face culling, as the thesis draws them).
+        Front = "front",
+        /// Faces away from the light (thesis 2.2.8: no bias needed, but only closed meshes cast).
+        Back = "back",
+    }
+}
+
+option_enum! {
+    /// How an omni light is shadow mapped.
+    pub enum OmniMode {
+        /// Six 90-degree spot lights, each lighting the directions of its own cube face (the paper).
+        SixSpots = "six_spots",
+        /// One depth cube map and one lit pass.
+        Cube = "cube",
+    }
+}
+
+option_enum! {
+    /// Alpha-tested surfaces in the shadow map pass.
+    pub enum AlphaCasters {
+        /// The depth pass samples alpha and discards like the surface does.
+        Test = "test",
+        /// Drawn solid.
+        Ignore = "ignore",
     }
 }
 
@@ -318,6 +444,53 @@ define_options! {
         pvs: bool = true;
         /// Skip BSP nodes and leaves whose boxes miss the view frustum.
         frustum: bool = true;
+    }
+
+    /// Shadow mapping (paper section 3, thesis chapter 2). Defaults: the paper's pipeline.
+    group shadow_map: ShadowMapOptions {
+        /// Copy the depth buffer into the texture (paper) or render to it through an FBO.
+        depth_source: DepthSource = DepthSource::Copy;
+        /// Side of each square depth texture in texels (the paper found 512 sharp enough).
+        size: u32 = 512, in 16 ..= 8192;
+        /// Depth texture precision: 24-bit (paper), 16-bit or 32-bit float.
+        depth_bits: DepthBits = DepthBits::D24;
+        /// Hardware compare (sampler2DShadow, LEQUAL) or a compare in the shader.
+        compare: Compare = Compare::Hardware;
+        /// Compare result in alpha, then the alpha test (paper), or intensity (thesis 2.2.6).
+        result: CompareResult = CompareResult::Alpha;
+        /// glAlphaFunc's function for the alpha result (Paul's Projects, the paper's [5]: GEQUAL).
+        alpha_func: AlphaTestFunc = AlphaTestFunc::Gequal;
+        /// glAlphaFunc's reference value (Paul's Projects: 0.99).
+        alpha_ref: f32 = 0.99, in 0.0 ..= 1.0;
+        /// Compare filtering: nearest (paper), hw2x2 (LINEAR), pcf3x3 (paper 3.1), pcf (N x N).
+        filter: Filter = Filter::Nearest;
+        /// N of the N x N percentage-closer filter (filter = pcf).
+        pcf_size: u32 = 5, in 2 ..= 15;
+        /// Apply glPolygonOffset at all.
+        offset: bool = true;
+        /// glPolygonOffset factor (thesis 2.2.8: 1.1, after Kilgard).
+        offset_factor: f32 = 1.1, in 0.0 ..= 1000.0;
+        /// glPolygonOffset units (thesis 2.2.8: 4).
+        offset_units: f32 = 4.0, in 0.0 ..= 100000.0;
+        /// Growth per subsequent light (paper 3.1): light k uses the offset times (1 + growth k).
+        offset_growth: f32 = 1.0, in 0.0 ..= 100.0;
+        /// Which pass the offset applies to: the shadow map (thesis), the lit pass (paper), both.
+        offset_pass: OffsetPass = OffsetPass::ShadowMap;
+        /// Points outside a map's frustum: clamp to the edge (the artifact), range test, or
+        /// clip planes.
+        outside: Outside = Outside::Clamp;
+        /// Shadow frustum field of view relative to what it must cover (2 x cutoff for spots, 90
+        /// degrees per cube face); below 1 it leaves part of the light outside the map.
+        fov_scale: f32 = 1.0, in 0.1 ..= 2.0;
+        /// Caster faces drawn into the map: front (toward the light) or back (thesis 2.2.8).
+        cull: CasterFaces = CasterFaces::Front;
+        /// Fit near and far to the casters in the light's view (thesis 2.2.2); off: near 1, far =
+        /// the light's radius.
+        fit_near_far: bool = true;
+        /// Omni lights as six 90-degree spot lights (paper) or one cube map.
+        omni: OmniMode = OmniMode::SixSpots;
+        /// Alpha-tested casters: alpha test in the depth pass, or drawn solid.
+        alpha_casters: AlphaCasters = AlphaCasters::Test;
     }
 
     /// Loading Quake 3 maps and models (applied when a scene is loaded).

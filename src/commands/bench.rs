@@ -2,6 +2,7 @@
 
 use super::{CommonArgs, load, start_gl};
 use anyhow::{Context, Result, bail};
+use shadowlab::options::Technique;
 use shadowlab::report::bench::{Bench, BenchSettings, sweep_configs};
 use shadowlab::report::{plot, table};
 use shadowlab::scene::path::{self, TURN_FRAMES};
@@ -56,7 +57,19 @@ pub fn run(common: &CommonArgs, args: &Args) -> Result<()> {
         .map(|s| parse_sweep(s))
         .collect::<Result<_>>()?;
     let loaded = load(common, args.scene.as_deref())?;
-    let (scene, options) = (loaded.scene, loaded.options);
+    let (scene, mut options) = (loaded.scene, loaded.options);
+    // Sweeping one technique's options without choosing it would measure nothing: pick it.
+    if options.technique == Technique::None && !sweeps.iter().any(|(k, _)| k == "technique") {
+        let implied = Technique::ALL.iter().copied().find(|t| {
+            *t != Technique::None && sweeps.iter().any(|(k, _)| k.starts_with(&format!("{t}.")))
+        });
+        if let Some(t) = implied {
+            eprintln!(
+                "note: the sweep sets {t}.* options, so technique = {t} (set technique to override)"
+            );
+            options.technique = t;
+        }
+    }
     let configs = sweep_configs(&options, &sweeps)?;
     let keys = match args.path.as_deref() {
         None => vec![path::PathKey::of(&scene.camera)],

@@ -7,6 +7,7 @@ pub mod osmesa;
 pub mod passes;
 pub mod program;
 pub mod renderer;
+pub mod shadow_maps;
 pub mod target;
 pub mod timing;
 pub mod upload;

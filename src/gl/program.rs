@@ -29,8 +29,9 @@ pub mod sources {
     pub const UNLIT_FRAG: &str = include_str!("../../shaders/unlit.frag");
     pub const LIT_FRAG: &str = include_str!("../../shaders/lit.frag");
     pub const GBUFFER_FRAG: &str = include_str!("../../shaders/gbuffer.frag");
-    pub const FULLSCREEN_VERT: &str = include_str!("../../shaders/fullscreen.vert");
-    pub const BLIT_FRAG: &str = include_str!("../../shaders/blit.frag");
+    pub const SHADOW: &str = include_str!("../../shaders/shadow.glsl");
+    pub const DEPTH_VERT: &str = include_str!("../../shaders/depth.vert");
+    pub const DEPTH_FRAG: &str = include_str!("../../shaders/depth.frag");
 }
 
 /// `#version`, the variant's defines, the shared helpers, then the stage's source.
@@ -124,10 +125,18 @@ impl Program {
             let count = gl.get_active_uniforms(program);
             for i in 0..count {
                 if let Some(u) = gl.get_active_uniform(program, i) {
-                    // Arrays report `name[0]`; store the base name too.
+                    // Arrays report `name[0]`: store the base name and every element.
                     let base = u.name.trim_end_matches("[0]").to_string();
                     if let Some(loc) = gl.get_uniform_location(program, &u.name) {
-                        uniforms.insert(base, loc);
+                        uniforms.insert(base.clone(), loc);
+                    }
+                    if u.size > 1 {
+                        for e in 0..u.size {
+                            let element = format!("{base}[{e}]");
+                            if let Some(loc) = gl.get_uniform_location(program, &element) {
+                                uniforms.insert(element, loc);
+                            }
+                        }
                     }
                 }
             }

@@ -1,17 +1,28 @@
-//! Executes a frame's plan with GL: owns the programs, the scene's GPU copy and the framebuffer,
-//! runs the passes in the paper's order and returns a [`Frame`].
+//! Executes a frame's plan with GL: owns the programs, the scene's GPU copy, the framebuffer and
+//! the shadow maps, runs the passes in the paper's order and returns a [`Frame`].
+//!
+//! Order (paper 3.1): for each shadow-mapped light, its views into depth textures (drawn into the
+//! frame's depth buffer and copied, or rendered straight into the texture); then the unlit world;
+//! then each light's additive pass. Masks and the G-buffer, when asked for, are drawn after the
+//! timed frame.
 
 use super::caps::{self, Caps};
+use super::passes::lit::ShadowBinding;
+use super::passes::shadow_map::{DepthTarget, copies_from_frame, copy_depth};
 use super::passes::{self, PassContext};
 use super::program::{Program, ProgramError, sources};
+use super::shadow_maps::ShadowMaps;
 use super::target::{Framebuffer, GBufferTarget, MaskTarget};
 use super::timing::PassTimer;
 use super::upload::GpuScene;
 use crate::frame::{Frame, GBuffer, Mask};
-use crate::options::Options;
-use crate::plan::Plan;
+use crate::options::{Compare, CompareResult, DepthBits, Filter, Options, Outside, Technique};
+use crate::plan::{LightPlan, Plan};
 use crate::scene::{Camera, Scene};
+use crate::shadow::projection::cube_face_view;
+use crate::shadow::views::ViewKind;
 use glow::HasContext;
+use std::collections::HashMap;
 use std::sync::Arc;
 use std::time::Instant;
 use thiserror::Error;
@@ -24,61 +35,8 @@ pub enum RenderError {
     Gl(String),
     #[error("no scene is loaded")]
     NoScene,
-}
-
-struct Programs {
-    unlit: Program,
-    lit: Program,
-    lit_mask: Program,
-    gbuffer: Program,
-    blit: Program,
-}
-
-impl Programs {
-    fn new(gl: &glow::Context) -> Result<Programs, ProgramError> {
-        Ok(Programs {
-            unlit: Program::new(
-                gl,
-                "unlit",
-                sources::WORLD_VERT,
-                Some(sources::UNLIT_FRAG),
-                &[],
-            )?,
-            lit: Program::new(gl, "lit", sources::WORLD_VERT, Some(sources::LIT_FRAG), &[])?,
-            lit_mask: Program::new(
-                gl,
-                "lit_mask",
-                sources::WORLD_VERT,
-                Some(sources::LIT_FRAG),
-                &["MASK_OUTPUT"],
-            )?,
-            gbuffer: Program::new(
-                gl,
-                "gbuffer",
-                sources::WORLD_VERT,
-                Some(sources::GBUFFER_FRAG),
-                &[],
-            )?,
-            blit: Program::new(
-                gl,
-                "blit",
-                sources::FULLSCREEN_VERT,
-                Some(sources::BLIT_FRAG),
-                &[],
-            )?,
-        })
-    }
-    fn delete(&self, gl: &glow::Context) {
-        for p in [
-            &self.unlit,
-            &self.lit,
-            &self.lit_mask,
-            &self.gbuffer,
-            &self.blit,
-        ] {
-            p.delete(gl);
-        }
-    }
+    #[error("{0}")]
+    Unsupported(String),
 }
 
 /// What a frame should produce besides its image and timings.
@@ -88,6 +46,103 @@ pub struct FrameRequest {
     pub masks: bool,
 }
 
+/// The `#define`s of the lit program for these options.
+fn lit_defines(options: &Options, cube: bool, mask: bool) -> Vec<&'static str> {
+    let mut d = Vec::new();
+    if options.technique == Technique::ShadowMap {
+        let o = &options.shadow_map;
+        d.push("SHADOW_MAP");
+        if cube {
+            d.push("SHADOW_CUBE");
+        }
+        if o.compare == Compare::Shader {
+            d.push("COMPARE_SHADER");
+        }
+        match o.filter {
+            Filter::Nearest => {}
+            Filter::Hw2x2 => d.push("FILTER_HW2X2"),
+            Filter::Pcf3x3 => d.push("FILTER_PCF3"),
+            Filter::Pcf => d.push("FILTER_PCFN"),
+        }
+        match o.outside {
+            Outside::Clamp => {}
+            Outside::Range => d.push("OUTSIDE_RANGE"),
+            Outside::ClipPlanes => d.push("CLIP_PLANES"),
+        }
+        if o.depth_bits != DepthBits::D32f {
+            d.push("REF_CLAMP");
+        }
+        if o.result == CompareResult::Alpha {
+            d.push("RESULT_ALPHA");
+        }
+    }
+    if mask {
+        d.push("MASK_OUTPUT");
+    }
+    d
+}
+
+struct Programs {
+    unlit: Program,
+    gbuffer: Program,
+    depth: Program,
+    /// Lit programs by their define set, compiled on first use.
+    lit: HashMap<String, Program>,
+}
+
+impl Programs {
+    fn new(gl: &glow::Context) -> Result<Programs, ProgramError> {
+        let world = |name, frag| Program::new(gl, name, sources::WORLD_VERT, Some(frag), &[]);
+        Ok(Programs {
+            unlit: world("unlit", sources::UNLIT_FRAG)?,
+            gbuffer: world("gbuffer", sources::GBUFFER_FRAG)?,
+            depth: Program::new(
+                gl,
+                "depth",
+                sources::DEPTH_VERT,
+                Some(sources::DEPTH_FRAG),
+                &[],
+            )?,
+            lit: HashMap::new(),
+        })
+    }
+
+    /// Compiles the lit variant for `defines` if needed; returns its key.
+    fn lit_variant(
+        &mut self,
+        gl: &glow::Context,
+        defines: &[&str],
+    ) -> Result<String, ProgramError> {
+        let key = defines.join(" ");
+        if !self.lit.contains_key(&key) {
+            let fragment = if defines.contains(&"SHADOW_MAP") {
+                format!("{}\n{}", sources::SHADOW, sources::LIT_FRAG)
+            } else {
+                sources::LIT_FRAG.to_string()
+            };
+            let p = Program::new(
+                gl,
+                &format!("lit[{key}]"),
+                sources::WORLD_VERT,
+                Some(&fragment),
+                defines,
+            )?;
+            self.lit.insert(key.clone(), p);
+        }
+        Ok(key)
+    }
+
+    fn delete(&mut self, gl: &glow::Context) {
+        for p in [&self.unlit, &self.gbuffer, &self.depth] {
+            p.delete(gl);
+        }
+        for p in self.lit.values() {
+            p.delete(gl);
+        }
+        self.lit.clear();
+    }
+}
+
 pub struct Renderer {
     gl: Arc<glow::Context>,
     pub caps: Caps,
@@ -95,10 +150,16 @@ pub struct Renderer {
     target: Framebuffer,
     gpu: Option<GpuScene>,
     timer: PassTimer,
+    shadow_maps: ShadowMaps,
     /// Created on the first frame that asks for masks.
     measure_targets: Option<(GBufferTarget, MaskTarget)>,
-    /// Core profile draws need a bound VAO even without attributes (full-screen triangles).
-    empty_vao: glow::VertexArray,
+}
+
+/// One shadow-mapped view's texture, by light plan and view index.
+struct ViewMap {
+    plan_index: usize,
+    view_index: usize,
+    texture: glow::Texture,
 }
 
 impl Renderer {
@@ -107,8 +168,6 @@ impl Renderer {
         let target = Framebuffer::new(&gl, width, height).map_err(RenderError::Gl)?;
         let caps = caps::probe(&gl, target.depth_stencil_bits(&gl));
         let programs = Programs::new(&gl)?;
-        // SAFETY: creating an empty vertex array object.
-        let empty_vao = unsafe { gl.create_vertex_array() }.map_err(RenderError::Gl)?;
         let timer = PassTimer::new(caps.has("timer_query"));
         Ok(Renderer {
             gl,
@@ -117,13 +176,18 @@ impl Renderer {
             target,
             gpu: None,
             timer,
+            shadow_maps: ShadowMaps::default(),
             measure_targets: None,
-            empty_vao,
         })
     }
 
     pub fn gl(&self) -> &glow::Context {
         &self.gl
+    }
+
+    /// Depth textures currently allocated for shadow maps.
+    pub fn shadow_map_textures(&self) -> usize {
+        self.shadow_maps.texture_count()
     }
 
     /// Uploads a scene, replacing the previous one.
@@ -137,9 +201,23 @@ impl Renderer {
         Ok(())
     }
 
-    fn ensure_size(&mut self, width: u32, height: u32) -> Result<(), RenderError> {
-        if self.target.width != width || self.target.height != height {
-            let new = Framebuffer::new(&self.gl, width, height).map_err(RenderError::Gl)?;
+    /// A frame of `width`×`height`, with storage of at least `alloc` and 32F depth if asked.
+    fn ensure_target(
+        &mut self,
+        width: u32,
+        height: u32,
+        alloc: (u32, u32),
+        float_depth: bool,
+    ) -> Result<(), RenderError> {
+        let t = &self.target;
+        let fits = t.width == width
+            && t.height == height
+            && t.alloc.0 >= alloc.0
+            && t.alloc.1 >= alloc.1
+            && t.float_depth == float_depth;
+        if !fits {
+            let new = Framebuffer::with_storage(&self.gl, width, height, alloc, float_depth)
+                .map_err(RenderError::Gl)?;
             self.target.delete(&self.gl);
             self.target = new;
             if let Some((g, m)) = self.measure_targets.take() {
@@ -177,8 +255,43 @@ impl Renderer {
         self.execute(scene, &plan, options, request)
     }
 
-    /// Runs the passes of `plan`: the unlit world, then each light's additive pass; then, untimed,
-    /// the measurement passes the request asks for.
+    fn check_support(&self, options: &Options, plan: &Plan) -> Result<(), RenderError> {
+        if !plan
+            .lights
+            .iter()
+            .any(|l| l.technique == Technique::ShadowMap)
+        {
+            return Ok(());
+        }
+        let o = &options.shadow_map;
+        let max = self.caps.max_texture_size.max(1) as u32;
+        if o.size > max {
+            return Err(RenderError::Unsupported(format!(
+                "shadow_map.size = {} exceeds GL_MAX_TEXTURE_SIZE {max}",
+                o.size
+            )));
+        }
+        if o.depth_source == crate::options::DepthSource::Fbo
+            && !self.caps.has("render_to_depth_texture")
+        {
+            return Err(RenderError::Unsupported(
+                "shadow_map.depth_source = fbo needs render-to-depth-texture; use copy".into(),
+            ));
+        }
+        if o.depth_bits == DepthBits::D32f && !self.caps.has("float_depth") {
+            return Err(RenderError::Unsupported(
+                "shadow_map.depth_bits = 32f needs float depth textures; use 24".into(),
+            ));
+        }
+        if o.outside == Outside::ClipPlanes && !self.caps.has("clip_distances") {
+            return Err(RenderError::Unsupported(
+                "shadow_map.outside = clip_planes needs 4 clip distances; use range".into(),
+            ));
+        }
+        Ok(())
+    }
+
+    /// Runs the passes of `plan`, then, untimed, the measurement passes the request asks for.
     pub fn execute(
         &mut self,
         scene: &Scene,
@@ -186,17 +299,44 @@ impl Renderer {
         options: &Options,
         request: FrameRequest,
     ) -> Result<Frame, RenderError> {
-        self.ensure_size(plan.camera.width, plan.camera.height)?;
+        self.check_support(options, plan)?;
+        let sm = &options.shadow_map;
+        let shadow_mapped = plan
+            .lights
+            .iter()
+            .any(|l| l.technique == Technique::ShadowMap);
+        let copy = shadow_mapped && copies_from_frame(sm);
+        let alloc = if copy { (sm.size, sm.size) } else { (0, 0) };
+        self.ensure_target(
+            plan.camera.width,
+            plan.camera.height,
+            alloc,
+            copy && sm.depth_bits == DepthBits::D32f,
+        )?;
         if request.masks && self.measure_targets.is_none() {
             let g = GBufferTarget::new(&self.gl, self.target.width, self.target.height)
                 .map_err(RenderError::Gl)?;
             let m = MaskTarget::new(&self.gl, &self.target).map_err(RenderError::Gl)?;
             self.measure_targets = Some((g, m));
         }
-        let gpu = self.gpu.as_ref().ok_or(RenderError::NoScene)?;
-        let gl: &glow::Context = &self.gl;
+        // Compile what this frame needs before borrowing the programs for the passes.
+        let gl_arc = self.gl.clone();
+        let gl: &glow::Context = &gl_arc;
+        let mut variants: HashMap<(bool, bool), String> = HashMap::new();
+        for cube in [false, true] {
+            for mask in [false, true] {
+                if (cube && !shadow_mapped) || (mask && !request.masks) {
+                    continue;
+                }
+                let key = self
+                    .programs
+                    .lit_variant(gl, &lit_defines(options, cube, mask))?;
+                variants.insert((cube, mask), key);
+            }
+        }
+
         let start = Instant::now();
-        self.target.bind(gl);
+        let gpu = self.gpu.as_ref().ok_or(RenderError::NoScene)?;
         let ctx = PassContext {
             gl,
             scene,
@@ -204,11 +344,94 @@ impl Renderer {
             plan,
             options,
         };
+
+        // Shadow maps of every shadow-mapped light first (paper 3.1).
+        let mut maps: Vec<ViewMap> = Vec::new();
+        let fbo = if shadow_mapped && !copy {
+            Some(self.shadow_maps.fbo(gl).map_err(RenderError::Gl)?)
+        } else {
+            None
+        };
+        for (pi, lp) in plan.lights.iter().enumerate() {
+            if lp.technique != Technique::ShadowMap {
+                continue;
+            }
+            for (vi, view) in lp.views.iter().enumerate() {
+                let cube = view.kind == ViewKind::Cube;
+                let texture = self
+                    .shadow_maps
+                    .slot(gl, maps.len(), cube, sm.size, sm.depth_bits)
+                    .map_err(RenderError::Gl)?;
+                let faces: Vec<(Option<usize>, glam::Mat4)> = if cube {
+                    let eye = scene.lights[lp.light].position;
+                    (0..6)
+                        .map(|f| (Some(f), view.projection * cube_face_view(eye, f)))
+                        .collect()
+                } else {
+                    vec![(None, view.view_proj())]
+                };
+                for (face, view_proj) in faces {
+                    let target = match fbo {
+                        Some(fbo) => DepthTarget::Fbo { fbo, texture },
+                        None => DepthTarget::Copy {
+                            frame: &self.target,
+                            texture,
+                        },
+                    };
+                    self.timer
+                        .begin(gl, format!("light{}.shadow_map", lp.light));
+                    passes::shadow_map::render(
+                        &ctx,
+                        &self.programs.depth,
+                        &view_proj,
+                        sm.size,
+                        &target,
+                        face,
+                        lp.order,
+                    );
+                    if copy {
+                        self.timer
+                            .begin(gl, format!("light{}.depth_copy", lp.light));
+                        copy_depth(gl, &self.target, texture, sm.size, face);
+                    }
+                }
+                ShadowMaps::configure(gl, texture, cube, sm.compare, sm.filter);
+                maps.push(ViewMap {
+                    plan_index: pi,
+                    view_index: vi,
+                    texture,
+                });
+            }
+        }
+
         self.timer.begin(gl, "base");
+        self.target.bind(gl);
         passes::base::draw(&ctx, &self.programs.unlit);
-        for lp in &plan.lights {
+        let lit_program = |cube: bool, mask: bool| &self.programs.lit[&variants[&(cube, mask)]];
+        let bindings = |pi: usize| -> Vec<(bool, ShadowBinding)> {
+            maps.iter()
+                .filter(|m| m.plan_index == pi)
+                .map(|m| {
+                    let view = &plan.lights[pi].views[m.view_index];
+                    (
+                        view.kind == ViewKind::Cube,
+                        ShadowBinding {
+                            view,
+                            texture: m.texture,
+                        },
+                    )
+                })
+                .collect()
+        };
+        for (pi, lp) in plan.lights.iter().enumerate() {
             self.timer.begin(gl, format!("light{}.lit", lp.light));
-            passes::lit::draw(&ctx, &self.programs.lit, lp.light);
+            self.draw_light(
+                &ctx,
+                lp,
+                &bindings(pi),
+                |cube| lit_program(cube, false),
+                false,
+            );
         }
         let passes = self.timer.finish(gl);
         // SAFETY: waits for the frame; no state change.
@@ -228,7 +451,7 @@ impl Renderer {
                 passes::gbuffer::draw(&ctx, &self.programs.gbuffer);
                 let gbuffer = read_gbuffer(gl, gtarget);
                 let mut masks = Vec::with_capacity(plan.lights.len());
-                for lp in &plan.lights {
+                for (pi, lp) in plan.lights.iter().enumerate() {
                     mtarget.bind(gl);
                     // SAFETY: clears the mask to "not a receiver"; depth and stencil untouched.
                     unsafe {
@@ -236,7 +459,13 @@ impl Renderer {
                         gl.clear_color(0.0, 0.0, 0.0, 0.0);
                         gl.clear(glow::COLOR_BUFFER_BIT);
                     }
-                    passes::lit::draw_mask(&ctx, &self.programs.lit_mask, lp.light);
+                    self.draw_light(
+                        &ctx,
+                        lp,
+                        &bindings(pi),
+                        |cube| lit_program(cube, true),
+                        true,
+                    );
                     masks.push(Mask {
                         light: lp.light,
                         width: mtarget.width,
@@ -260,24 +489,51 @@ impl Renderer {
         })
     }
 
+    /// One light's lit (or mask) passes: one per shadow view, or one without shadows.
+    fn draw_light<'p>(
+        &self,
+        ctx: &PassContext,
+        lp: &LightPlan,
+        bindings: &[(bool, ShadowBinding)],
+        program: impl Fn(bool) -> &'p Program,
+        mask: bool,
+    ) {
+        let pass = |p: &Program, s: Option<&ShadowBinding>| {
+            if mask {
+                passes::lit::draw_mask(ctx, p, lp, s);
+            } else {
+                passes::lit::draw(ctx, p, lp, s);
+            }
+        };
+        if bindings.is_empty() {
+            pass(program(false), None);
+        }
+        for (cube, b) in bindings {
+            pass(program(*cube), Some(b));
+        }
+    }
+
     /// Draws the last frame into the default framebuffer of a window, scaled to `width`×`height`.
     pub fn present_to_default(&self, width: u32, height: u32) {
         let gl: &glow::Context = &self.gl;
+        let (fw, fh) = self.target.alloc;
         // SAFETY: the default framebuffer exists on window contexts; state is set explicitly.
         unsafe {
+            gl.bind_framebuffer(glow::READ_FRAMEBUFFER, Some(self.target.fbo));
+            gl.bind_framebuffer(glow::DRAW_FRAMEBUFFER, None);
+            gl.blit_framebuffer(
+                0,
+                0,
+                self.target.width.min(fw) as i32,
+                self.target.height.min(fh) as i32,
+                0,
+                0,
+                width as i32,
+                height as i32,
+                glow::COLOR_BUFFER_BIT,
+                glow::LINEAR,
+            );
             gl.bind_framebuffer(glow::FRAMEBUFFER, None);
-            gl.viewport(0, 0, width as i32, height as i32);
-            gl.disable(glow::DEPTH_TEST);
-            gl.disable(glow::BLEND);
-            gl.disable(glow::STENCIL_TEST);
-            gl.disable(glow::CULL_FACE);
-            self.programs.blit.bind(gl);
-            self.programs.blit.set_i32(gl, "u_source", 0);
-            gl.active_texture(glow::TEXTURE0);
-            gl.bind_texture(glow::TEXTURE_2D, Some(self.target.color));
-            gl.bind_vertex_array(Some(self.empty_vao));
-            gl.draw_arrays(glow::TRIANGLES, 0, 3);
-            gl.bind_vertex_array(None);
         }
     }
 }
@@ -307,18 +563,18 @@ fn read_gbuffer(gl: &glow::Context, t: &GBufferTarget) -> GBuffer {
 
 impl Drop for Renderer {
     fn drop(&mut self) {
-        let gl: &glow::Context = &self.gl;
+        let gl_arc = self.gl.clone();
+        let gl: &glow::Context = &gl_arc;
         if let Some(g) = self.gpu.take() {
             g.delete(gl);
         }
         self.programs.delete(gl);
         self.target.delete(gl);
+        self.shadow_maps.delete(gl);
         if let Some((g, m)) = self.measure_targets.take() {
             g.delete(gl);
             m.delete(gl);
         }
         self.timer.delete(gl);
-        // SAFETY: deleting our own VAO once.
-        unsafe { gl.delete_vertex_array(self.empty_vao) };
     }
 }

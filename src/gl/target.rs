@@ -4,17 +4,36 @@
 use glow::HasContext;
 
 /// The frame's "screen": RGBA8 colour plus a packed depth/stencil texture (24-bit depth, 8-bit
-/// stencil, as the paper's card had).
+/// stencil, as the paper's card had; 32-bit float depth on request).
+///
+/// The frame occupies `width`×`height` at the origin; the storage may be larger (`alloc`), so that
+/// the paper's shadow maps, drawn into the screen's depth buffer before being copied, fit even when
+/// they are bigger than the frame.
 pub struct Framebuffer {
     pub fbo: glow::Framebuffer,
     pub color: glow::Texture,
     pub depth_stencil: glow::Texture,
     pub width: u32,
     pub height: u32,
+    pub alloc: (u32, u32),
+    pub float_depth: bool,
 }
 
 impl Framebuffer {
     pub fn new(gl: &glow::Context, width: u32, height: u32) -> Result<Framebuffer, String> {
+        Framebuffer::with_storage(gl, width, height, (width, height), false)
+    }
+
+    /// A `width`×`height` frame in storage of at least `alloc`, with 32F depth if asked.
+    pub fn with_storage(
+        gl: &glow::Context,
+        width: u32,
+        height: u32,
+        alloc: (u32, u32),
+        float_depth: bool,
+    ) -> Result<Framebuffer, String> {
+        let alloc = (alloc.0.max(width), alloc.1.max(height));
+        let (aw, ah) = alloc;
         // SAFETY: objects are created here and owned by the returned value; bindings reset to 0.
         unsafe {
             let color = gl.create_texture()?;
@@ -23,8 +42,8 @@ impl Framebuffer {
                 glow::TEXTURE_2D,
                 0,
                 glow::RGBA8 as i32,
-                width as i32,
-                height as i32,
+                aw as i32,
+                ah as i32,
                 0,
                 glow::RGBA,
                 glow::UNSIGNED_BYTE,
@@ -33,15 +52,23 @@ impl Framebuffer {
             set_nearest_clamp(gl);
             let depth_stencil = gl.create_texture()?;
             gl.bind_texture(glow::TEXTURE_2D, Some(depth_stencil));
+            let (internal, ty) = if float_depth {
+                (
+                    glow::DEPTH32F_STENCIL8,
+                    glow::FLOAT_32_UNSIGNED_INT_24_8_REV,
+                )
+            } else {
+                (glow::DEPTH24_STENCIL8, glow::UNSIGNED_INT_24_8)
+            };
             gl.tex_image_2d(
                 glow::TEXTURE_2D,
                 0,
-                glow::DEPTH24_STENCIL8 as i32,
-                width as i32,
-                height as i32,
+                internal as i32,
+                aw as i32,
+                ah as i32,
                 0,
                 glow::DEPTH_STENCIL,
-                glow::UNSIGNED_INT_24_8,
+                ty,
                 glow::PixelUnpackData::Slice(None),
             );
             set_nearest_clamp(gl);
@@ -70,11 +97,13 @@ impl Framebuffer {
                 depth_stencil,
                 width,
                 height,
+                alloc,
+                float_depth,
             };
             if status != glow::FRAMEBUFFER_COMPLETE {
                 fb.delete(gl);
                 return Err(format!(
-                    "framebuffer {width}x{height} is incomplete (status 0x{status:x})"
+                    "framebuffer {aw}x{ah} is incomplete (status 0x{status:x})"
                 ));
             }
             Ok(fb)

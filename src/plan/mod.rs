@@ -4,10 +4,11 @@
 
 pub mod frustum;
 
-use crate::options::Options;
+use crate::options::{Options, Technique};
 use crate::q3::vis::VisStats;
-use crate::scene::{Camera, Scene, SurfaceOwner};
+use crate::scene::{Aabb, Camera, Scene, SurfaceOwner};
 use crate::shadow::projection;
+use crate::shadow::views::{ShadowView, shadow_views};
 use frustum::Frustum;
 use glam::{Mat3, Mat4, Vec3};
 use serde::Serialize;
@@ -45,6 +46,11 @@ impl CameraSetup {
 pub struct LightPlan {
     /// Index into `Scene::lights`.
     pub light: usize,
+    pub technique: Technique,
+    /// Position among this frame's shadowed lights: the paper grows the polygon offset with it.
+    pub order: usize,
+    /// Shadow-map views (shadow mapping only).
+    pub views: Vec<ShadowView>,
 }
 
 /// What the plan decided, for stats overlays and bench JSON.
@@ -63,6 +69,8 @@ pub struct Plan {
     pub camera: CameraSetup,
     /// Per surface: drawn in camera passes.
     pub visible: Vec<bool>,
+    /// Per surface: drawn into shadow maps and volumes.
+    pub casters: Vec<bool>,
     pub lights: Vec<LightPlan>,
     pub stats: PlanStats,
 }
@@ -109,13 +117,43 @@ impl Plan {
                 stats.triangles_visible += s.index_count as usize / 3;
             }
         }
+        let casters: Vec<bool> = scene
+            .surfaces
+            .iter()
+            .map(|s| {
+                let m = &scene.materials[s.material];
+                m.visible && m.casts_shadows
+            })
+            .collect();
+        let caster_bounds: Vec<Aabb> = match options.technique {
+            Technique::None => Vec::new(),
+            _ => scene
+                .surfaces
+                .iter()
+                .zip(&casters)
+                .filter(|(_, c)| **c)
+                .map(|(s, _)| s.bounds)
+                .collect(),
+        };
         let lights = (0..scene.lights.len())
             .filter(|&i| options.light_enabled(i))
-            .map(|light| LightPlan { light })
+            .enumerate()
+            .map(|(order, light)| LightPlan {
+                light,
+                technique: options.technique,
+                order,
+                views: match options.technique {
+                    Technique::ShadowMap => {
+                        shadow_views(&scene.lights[light], &caster_bounds, &options.shadow_map)
+                    }
+                    Technique::None => Vec::new(),
+                },
+            })
             .collect();
         Plan {
             camera,
             visible,
+            casters,
             lights,
             stats,
         }

@@ -2,3 +2,4 @@
 
 pub mod edges;
 pub mod projection;
+pub mod views;

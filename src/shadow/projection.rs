@@ -68,8 +68,8 @@ pub fn cube_face_view(eye: Vec3, face: usize) -> Mat4 {
 }
 
 /// Near and far distances along a view that just enclose `points` (thesis 2.2.2: a tight range
-/// gives the depth texture its precision). Points behind the eye are ignored; the near plane never
-/// goes below `min_near` and far is always beyond near.
+/// gives the depth texture its precision). Points behind the eye pull the near plane in to
+/// `min_near`, which it never goes below; far always lies beyond near, by at least 0.1%.
 pub fn fit_near_far(
     view: &Mat4,
     points: impl IntoIterator<Item = Vec3>,
@@ -92,7 +92,7 @@ pub fn fit_near_far(
     } else {
         min_near
     };
-    let far = far.max(near * 2.0);
+    let far = far.max(near * 1.001);
     (near, far)
 }
 

@@ -123,3 +123,98 @@ pub fn floor_quad(cx: f32, cy: f32, half: f32, z: f32) -> shadowlab::scene::shap
     );
     m
 }
+
+/// Renders configurations of one scene and view, and measures each against the exact reference
+/// (computed once: the G-buffer does not depend on the shadow technique).
+pub struct Measurer {
+    pub scene: Scene,
+    ctx: shadowlab::gl::GlContext,
+    renderer: shadowlab::gl::Renderer,
+    reference: shadowlab::truth::Reference,
+    exact: std::collections::HashMap<(u32, u32, usize), shadowlab::frame::Mask>,
+}
+
+/// One configuration's result.
+pub struct Measured {
+    pub frame: Frame,
+    pub per_light: Vec<(usize, shadowlab::truth::Counts)>,
+    pub total: shadowlab::truth::Counts,
+}
+
+impl Measured {
+    pub fn light(&self, l: usize) -> shadowlab::truth::Counts {
+        self.per_light.iter().find(|(i, _)| *i == l).unwrap().1
+    }
+    pub fn mask(&self, l: usize) -> &shadowlab::frame::Mask {
+        self.frame.masks.iter().find(|m| m.light == l).unwrap()
+    }
+}
+
+impl Measurer {
+    pub fn new(scene: Scene, options: &Options) -> Measurer {
+        let (ctx, mut renderer) = gl_on(BackendChoice::Egl, options);
+        renderer.load_scene(&scene).unwrap();
+        let reference = shadowlab::truth::Reference::build(&scene);
+        Measurer {
+            scene,
+            ctx,
+            renderer,
+            reference,
+            exact: std::collections::HashMap::new(),
+        }
+    }
+
+    pub fn renderer(&mut self) -> &mut shadowlab::gl::Renderer {
+        let _ = &self.ctx;
+        &mut self.renderer
+    }
+
+    /// The exact mask of light `l` for frames of this size.
+    pub fn exact(&self, w: u32, h: u32, l: usize) -> &shadowlab::frame::Mask {
+        &self.exact[&(w, h, l)]
+    }
+
+    pub fn measure(&mut self, options: &Options) -> Measured {
+        let frame = self
+            .renderer
+            .render_with(
+                &self.scene,
+                options,
+                shadowlab::gl::FrameRequest { masks: true },
+            )
+            .unwrap_or_else(|e| panic!("{e}"));
+        let g = frame.gbuffer.as_ref().unwrap();
+        let mut total = shadowlab::truth::Counts::default();
+        let mut per_light = Vec::new();
+        for m in &frame.masks {
+            let key = (frame.width, frame.height, m.light);
+            let (scene, reference) = (&self.scene, &self.reference);
+            let exact = self.exact.entry(key).or_insert_with(|| {
+                shadowlab::truth::reference_mask(
+                    reference,
+                    g,
+                    &scene.lights[m.light],
+                    m.light,
+                    shadowlab::truth::Tracing::Bvh,
+                )
+            });
+            let c = shadowlab::truth::compare(m, exact);
+            total.add(&c);
+            per_light.push((m.light, c));
+        }
+        Measured {
+            frame,
+            per_light,
+            total,
+        }
+    }
+}
+
+/// Default options with `sets` applied.
+pub fn options_with(sets: &[&str]) -> Options {
+    let mut o = Options::default();
+    for s in sets {
+        o.set_assignment(s).unwrap_or_else(|e| panic!("{e}"));
+    }
+    o
+}

@@ -1,16 +1,32 @@
 //! One light's additive pass (paper 3.1 and 4: "draw lit world with additive blending"), and its
 //! mask variant, which writes the same fragments' decision instead of light.
 
+use super::shadow_map::offset_for;
 use super::{PassContext, draw_items};
 use crate::gl::program::Program;
+use crate::options::{OffsetPass, Outside};
+use crate::plan::LightPlan;
 use crate::scene::{LightKind, light::SPOT_INNER_FRACTION};
+use crate::shadow::views::{ShadowView, ViewKind};
 use glam::Vec3;
 use glow::HasContext;
 
-/// Binds `program` with light `index`'s uniforms.
-fn bind_light(ctx: &PassContext, program: &Program, index: usize) {
+/// A shadow map to test the light's fragments against.
+pub struct ShadowBinding<'a> {
+    pub view: &'a ShadowView,
+    pub texture: glow::Texture,
+}
+
+/// Binds `program` with the light's uniforms and, with a shadow map, the texgen, the map and
+/// the fixed-function state of the technique.
+fn bind_light(
+    ctx: &PassContext,
+    program: &Program,
+    lp: &LightPlan,
+    shadow: Option<&ShadowBinding>,
+) {
     let gl = ctx.gl;
-    let light = &ctx.scene.lights[index];
+    let light = &ctx.scene.lights[lp.light];
     program.bind(gl);
     program.set_mat4(gl, "u_view_proj", &ctx.plan.camera.view_proj);
     program.set_i32(gl, "u_texture", 0);
@@ -35,6 +51,59 @@ fn bind_light(ctx: &PassContext, program: &Program, index: usize) {
     program.set_f32(gl, "u_cos_cutoff", cos_cutoff);
     program.set_f32(gl, "u_cos_inner", cos_inner);
     program.set_f32(gl, "u_radius", light.radius);
+    let o = &ctx.options.shadow_map;
+    // SAFETY: fixed-function state and a texture of our own on unit 1.
+    unsafe {
+        match (offset_for(o, lp.order), o.offset_pass, shadow.is_some()) {
+            // The paper's lit-pass offset pulls the lit world toward the camera.
+            (Some((factor, units)), OffsetPass::Lit | OffsetPass::Both, true) => {
+                gl.enable(glow::POLYGON_OFFSET_FILL);
+                gl.polygon_offset(-factor, -units);
+            }
+            _ => gl.disable(glow::POLYGON_OFFSET_FILL),
+        }
+        for i in 0..4 {
+            gl.disable(glow::CLIP_DISTANCE0 + i);
+        }
+    }
+    let Some(s) = shadow else { return };
+    let camera_view = ctx.plan.camera.view;
+    program.set_mat4(gl, "u_view", &camera_view);
+    program.set_mat4(gl, "u_texgen", &s.view.texgen(&camera_view));
+    program.set_f32(gl, "u_map_size", o.size as f32);
+    program.set_i32(gl, "u_pcf_size", o.pcf_size as i32);
+    program.set_i32(gl, "u_sm_alpha_func", o.alpha_func as i32);
+    program.set_f32(gl, "u_sm_alpha_ref", o.alpha_ref);
+    let face = match s.view.kind {
+        ViewKind::Face(f) => f as i32,
+        _ => -1,
+    };
+    program.set_i32(gl, "u_face", face);
+    program.set_vec2(
+        gl,
+        "u_cube_near_far",
+        glam::Vec2::new(s.view.near, s.view.far),
+    );
+    let cube = s.view.kind == ViewKind::Cube;
+    // SAFETY: binds our depth texture to unit 1 and enables the clip distances the shader writes.
+    unsafe {
+        gl.active_texture(glow::TEXTURE1);
+        if cube {
+            gl.bind_texture(glow::TEXTURE_CUBE_MAP, Some(s.texture));
+            program.set_i32(gl, "u_shadow_cube", 1);
+        } else {
+            gl.bind_texture(glow::TEXTURE_2D, Some(s.texture));
+            program.set_i32(gl, "u_shadow_map", 1);
+        }
+        gl.active_texture(glow::TEXTURE0);
+        if o.outside == Outside::ClipPlanes && !cube {
+            let planes = s.view.clip_planes();
+            for (i, p) in planes.iter().take(4).enumerate() {
+                program.set_vec4(gl, &format!("u_clip_planes[{i}]"), *p);
+                gl.enable(glow::CLIP_DISTANCE0 + i as u32);
+            }
+        }
+    }
 }
 
 /// Receiving surfaces in view.
@@ -53,12 +122,21 @@ fn depth_state(gl: &glow::Context) {
         gl.enable(glow::DEPTH_TEST);
         gl.depth_func(glow::LEQUAL);
         gl.disable(glow::STENCIL_TEST);
-        gl.disable(glow::POLYGON_OFFSET_FILL);
     }
 }
 
-/// Adds light `index`'s contribution where the depth equals the unlit pass's.
-pub fn draw(ctx: &PassContext, program: &Program, index: usize) {
+fn finish(gl: &glow::Context) {
+    // SAFETY: state this pass enabled, switched off for the passes that do not set it.
+    unsafe {
+        gl.disable(glow::POLYGON_OFFSET_FILL);
+        for i in 0..4 {
+            gl.disable(glow::CLIP_DISTANCE0 + i);
+        }
+    }
+}
+
+/// Adds the light's contribution where the depth equals the unlit pass's.
+pub fn draw(ctx: &PassContext, program: &Program, lp: &LightPlan, shadow: Option<&ShadowBinding>) {
     let gl = ctx.gl;
     depth_state(gl);
     // SAFETY: fixed-function state.
@@ -67,12 +145,18 @@ pub fn draw(ctx: &PassContext, program: &Program, index: usize) {
         gl.enable(glow::BLEND);
         gl.blend_func(glow::ONE, glow::ONE);
     }
-    bind_light(ctx, program, index);
+    bind_light(ctx, program, lp, shadow);
     draw_items(ctx, program, &receivers(ctx), |_| {});
+    finish(gl);
 }
 
-/// Writes light `index`'s decision into the bound mask target (cleared to "not a receiver").
-pub fn draw_mask(ctx: &PassContext, program: &Program, index: usize) {
+/// Writes the light's decision into the bound mask target (cleared to "not a receiver").
+pub fn draw_mask(
+    ctx: &PassContext,
+    program: &Program,
+    lp: &LightPlan,
+    shadow: Option<&ShadowBinding>,
+) {
     let gl = ctx.gl;
     depth_state(gl);
     // SAFETY: fixed-function state.
@@ -80,7 +164,8 @@ pub fn draw_mask(ctx: &PassContext, program: &Program, index: usize) {
         gl.color_mask(true, true, true, true);
         gl.disable(glow::BLEND);
     }
-    bind_light(ctx, program, index);
+    bind_light(ctx, program, lp, shadow);
     program.set_i32(gl, "u_mask_value", 0);
     draw_items(ctx, program, &receivers(ctx), |_| {});
+    finish(gl);
 }

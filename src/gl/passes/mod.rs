@@ -4,6 +4,7 @@
 pub mod base;
 pub mod gbuffer;
 pub mod lit;
+pub mod shadow_map;
 
 use super::program::Program;
 use super::upload::{DrawItem, GpuScene};
@@ -45,6 +46,19 @@ pub fn draw_items(
     ctx: &PassContext,
     program: &Program,
     items: &[DrawItem],
+    extra: impl FnMut(&DrawItem),
+) {
+    draw_items_with(ctx, program, items, |c| c, true, extra);
+}
+
+/// [`draw_items`] with the material's culling mapped through `cull` and its alpha test applied
+/// only when `alpha_test` is set.
+pub fn draw_items_with(
+    ctx: &PassContext,
+    program: &Program,
+    items: &[DrawItem],
+    cull: impl Fn(Cull) -> Cull,
+    alpha_test: bool,
     mut extra: impl FnMut(&DrawItem),
 ) {
     let gl = ctx.gl;
@@ -69,12 +83,13 @@ pub fn draw_items(
                 glow::TEXTURE_2D,
                 Some(ctx.gpu.texture_for(ctx.scene, item.material)),
             );
-            program.set_i32(
-                gl,
-                "u_alpha_func",
-                material.alpha_test.map_or(0, |a| a.code()),
-            );
-            apply_cull(gl, material.cull);
+            let alpha = if alpha_test {
+                material.alpha_test
+            } else {
+                None
+            };
+            program.set_i32(gl, "u_alpha_func", alpha.map_or(0, |a| a.code()));
+            apply_cull(gl, cull(material.cull));
             extra(item);
             gl.draw_elements(
                 glow::TRIANGLES,

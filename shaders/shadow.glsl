@@ -1,0 +1,131 @@
+// Shadow-map lookups for the lit pass (included only with SHADOW_MAP).
+//
+// Defines: SHADOW_CUBE (one cube map), COMPARE_SHADER (fetch and compare here instead of
+// sampler2DShadow), FILTER_HW2X2 / FILTER_PCF3 / FILTER_PCFN (default: nearest),
+// OUTSIDE_RANGE (no compare outside [0,1]), REF_CLAMP (fixed-point depth: the reference is
+// clamped to [0,1] before the compare, as GL does).
+
+uniform float u_map_size;
+uniform int u_pcf_size;
+
+#ifdef SHADOW_CUBE
+#ifdef COMPARE_SHADER
+uniform samplerCube u_shadow_cube;
+#else
+uniform samplerCubeShadow u_shadow_cube;
+#endif
+uniform vec2 u_cube_near_far;
+#else
+#ifdef COMPARE_SHADER
+uniform sampler2D u_shadow_map;
+#else
+uniform sampler2DShadow u_shadow_map;
+#endif
+#endif
+
+float reference_depth(float r) {
+#ifdef REF_CLAMP
+    return clamp(r, 0.0, 1.0);
+#else
+    return r;
+#endif
+}
+
+#ifndef SHADOW_CUBE
+// One compare at uv: 1 if the fragment is no farther than the stored depth (LEQUAL).
+float compare_at(vec2 uv, float ref) {
+#ifdef COMPARE_SHADER
+    return reference_depth(ref) <= texture(u_shadow_map, uv).r ? 1.0 : 0.0;
+#else
+    return texture(u_shadow_map, vec3(uv, ref));
+#endif
+}
+
+#if defined(COMPARE_SHADER) && defined(FILTER_HW2X2)
+// LINEAR filtering of compares, as the hardware does it: four texel compares, bilinear weights.
+float compare_bilinear(vec2 uv, float ref) {
+    vec2 t = uv * u_map_size - 0.5;
+    vec2 f = fract(t);
+    ivec2 i0 = ivec2(floor(t));
+    ivec2 last = ivec2(int(u_map_size) - 1);
+    float r = reference_depth(ref);
+    float c00 = r <= texelFetch(u_shadow_map, clamp(i0, ivec2(0), last), 0).r ? 1.0 : 0.0;
+    float c10 = r <= texelFetch(u_shadow_map, clamp(i0 + ivec2(1, 0), ivec2(0), last), 0).r ? 1.0 : 0.0;
+    float c01 = r <= texelFetch(u_shadow_map, clamp(i0 + ivec2(0, 1), ivec2(0), last), 0).r ? 1.0 : 0.0;
+    float c11 = r <= texelFetch(u_shadow_map, clamp(i0 + ivec2(1, 1), ivec2(0), last), 0).r ? 1.0 : 0.0;
+    return mix(mix(c00, c10, f.x), mix(c01, c11, f.x), f.y);
+}
+#endif
+
+// Fraction of the light reaching the fragment, from texgen coordinates (s, t, r, q).
+float shadow_visibility(vec4 stq) {
+    // ARB_shadow: points behind the light (q <= 0) and with negative r read as shadowed.
+    if (stq.w <= 0.0 || stq.z < 0.0) return 0.0;
+    vec3 p = stq.xyz / stq.w;
+#ifdef OUTSIDE_RANGE
+    // The texgen range test: outside the map no compare is made.
+    if (p.x < 0.0 || p.x > 1.0 || p.y < 0.0 || p.y > 1.0) return 1.0;
+#endif
+    float texel = 1.0 / u_map_size;
+#if defined(FILTER_PCF3) || defined(FILTER_PCFN)
+#ifdef FILTER_PCF3
+    int n = 3;
+#else
+    int n = u_pcf_size;
+#endif
+    float sum = 0.0;
+    float lo = -0.5 * float(n - 1);
+    for (int j = 0; j < n; j++) {
+        for (int i = 0; i < n; i++) {
+            sum += compare_at(p.xy + vec2(lo + float(i), lo + float(j)) * texel, p.z);
+        }
+    }
+    return sum / float(n * n);
+#elif defined(COMPARE_SHADER) && defined(FILTER_HW2X2)
+    return compare_bilinear(p.xy, p.z);
+#else
+    return compare_at(p.xy, p.z);
+#endif
+}
+#else
+// Cube map: the compared depth is the major axis distance through the faces' projection.
+float cube_compare(vec3 d, float ref) {
+#ifdef COMPARE_SHADER
+    return reference_depth(ref) <= texture(u_shadow_cube, d).r ? 1.0 : 0.0;
+#else
+    return texture(u_shadow_cube, vec4(d, ref));
+#endif
+}
+
+float shadow_visibility_cube(vec3 d) {
+    vec3 a = abs(d);
+    float major = max(a.x, max(a.y, a.z));
+    float n = u_cube_near_far.x;
+    float f = u_cube_near_far.y;
+    float ndc = (f + n) / (f - n) - 2.0 * f * n / ((f - n) * major);
+    float ref = 0.5 * ndc + 0.5;
+    if (ref < 0.0) return 0.0;
+#if defined(FILTER_PCF3) || defined(FILTER_PCFN)
+#ifdef FILTER_PCF3
+    int k = 3;
+#else
+    int k = u_pcf_size;
+#endif
+    // Taps across the face, one texel apart at this distance.
+    vec3 axis = a.x >= a.y && a.x >= a.z ? vec3(1, 0, 0) : (a.y >= a.z ? vec3(0, 1, 0) : vec3(0, 0, 1));
+    vec3 u = normalize(cross(axis, abs(axis.y) > 0.5 ? vec3(0, 0, 1) : vec3(0, 1, 0)));
+    vec3 v = cross(axis, u);
+    float step = 2.0 * major / u_map_size;
+    float sum = 0.0;
+    float lo = -0.5 * float(k - 1);
+    for (int j = 0; j < k; j++) {
+        for (int i = 0; i < k; i++) {
+            sum += cube_compare(d + (u * (lo + float(i)) + v * (lo + float(j))) * step, ref);
+        }
+    }
+    return sum / float(k * k);
+#else
+    return cube_compare(d, ref);
+#endif
+}
+#endif

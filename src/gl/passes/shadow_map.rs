@@ -1,0 +1,163 @@
+//! The light's view into a depth texture (paper 3.1; thesis 2.2.3–2.2.4, 2.2.8, 2.2.10): depth
+//! only, colour writes off, viewport = map size, the polygon offset, then — on the paper's path —
+//! a copy of the depth buffer into the texture (glCopyTexSubImage2D).
+
+use super::{PassContext, draw_items_with};
+use crate::gl::program::Program;
+use crate::gl::target::Framebuffer;
+use crate::options::{AlphaCasters, CasterFaces, DepthSource, OffsetPass, ShadowMapOptions};
+use crate::scene::Cull;
+use glam::Mat4;
+use glow::HasContext;
+
+/// glPolygonOffset (factor, units) of the light with `order` among the shadowed lights, or None
+/// when the offset is off: the paper's growth makes each subsequent light's offset larger.
+pub fn offset_for(o: &ShadowMapOptions, order: usize) -> Option<(f32, f32)> {
+    o.offset.then(|| {
+        let k = 1.0 + o.offset_growth * order as f32;
+        (o.offset_factor * k, o.offset_units * k)
+    })
+}
+
+/// Where the depth pass draws.
+pub enum DepthTarget<'a> {
+    /// The frame's own depth buffer, then a copy into `texture` (the paper).
+    Copy {
+        frame: &'a Framebuffer,
+        texture: glow::Texture,
+    },
+    /// Straight into `texture` through `fbo`.
+    Fbo {
+        fbo: glow::Framebuffer,
+        texture: glow::Texture,
+    },
+}
+
+/// Which texture image a view writes: a 2D map, or one face of a cube map.
+pub fn image_target(cube_face: Option<usize>) -> u32 {
+    match cube_face {
+        Some(f) => glow::TEXTURE_CUBE_MAP_POSITIVE_X + f as u32,
+        None => glow::TEXTURE_2D,
+    }
+}
+
+/// Draws the casters into the light view `view_proj` (a `size`² viewport).
+pub fn render(
+    ctx: &PassContext,
+    program: &Program,
+    view_proj: &Mat4,
+    size: u32,
+    target: &DepthTarget,
+    cube_face: Option<usize>,
+    order: usize,
+) {
+    let gl = ctx.gl;
+    let o = &ctx.options.shadow_map;
+    // SAFETY: fixed-function state and a depth attachment of our own texture.
+    unsafe {
+        match target {
+            DepthTarget::Copy { frame, .. } => {
+                gl.bind_framebuffer(glow::FRAMEBUFFER, Some(frame.fbo));
+            }
+            DepthTarget::Fbo { fbo, texture } => {
+                gl.bind_framebuffer(glow::FRAMEBUFFER, Some(*fbo));
+                gl.framebuffer_texture_2d(
+                    glow::FRAMEBUFFER,
+                    glow::DEPTH_ATTACHMENT,
+                    image_target(cube_face),
+                    Some(*texture),
+                    0,
+                );
+                gl.draw_buffer(glow::NONE);
+                gl.read_buffer(glow::NONE);
+            }
+        }
+        gl.viewport(0, 0, size as i32, size as i32);
+        gl.color_mask(false, false, false, false);
+        gl.depth_mask(true);
+        gl.clear_depth_f64(1.0);
+        gl.clear(glow::DEPTH_BUFFER_BIT);
+        gl.enable(glow::DEPTH_TEST);
+        gl.depth_func(glow::LESS);
+        gl.disable(glow::BLEND);
+        gl.disable(glow::STENCIL_TEST);
+        match (offset_for(o, order), o.offset_pass) {
+            (Some((factor, units)), OffsetPass::ShadowMap | OffsetPass::Both) => {
+                gl.enable(glow::POLYGON_OFFSET_FILL);
+                gl.polygon_offset(factor, units);
+            }
+            _ => gl.disable(glow::POLYGON_OFFSET_FILL),
+        }
+    }
+    program.bind(gl);
+    program.set_mat4(gl, "u_view_proj", view_proj);
+    program.set_i32(gl, "u_texture", 0);
+    let items = ctx.gpu.draw_list(ctx.scene, |s| ctx.plan.casters[s]);
+    // Back faces instead of front faces (thesis 2.2.8) flips every one-sided material's culling.
+    let faces = o.cull;
+    let cull = move |c: Cull| match (faces, c) {
+        (CasterFaces::Front, c) => c,
+        (CasterFaces::Back, Cull::Back) => Cull::Front,
+        (CasterFaces::Back, Cull::Front) => Cull::Back,
+        (CasterFaces::Back, Cull::None) => Cull::None,
+    };
+    draw_items_with(
+        ctx,
+        program,
+        &items,
+        cull,
+        o.alpha_casters == AlphaCasters::Test,
+        |_| {},
+    );
+    // SAFETY: state reset for what follows; the copy reads our own framebuffer.
+    unsafe {
+        gl.disable(glow::POLYGON_OFFSET_FILL);
+        gl.color_mask(true, true, true, true);
+        if let DepthTarget::Fbo { .. } = target {
+            gl.framebuffer_texture_2d(
+                glow::FRAMEBUFFER,
+                glow::DEPTH_ATTACHMENT,
+                image_target(cube_face),
+                None,
+                0,
+            );
+        }
+    }
+}
+
+/// glCopyTexSubImage2D of the frame's depth buffer (`size`² at the origin) into the map.
+pub fn copy_depth(
+    gl: &glow::Context,
+    frame: &Framebuffer,
+    texture: glow::Texture,
+    size: u32,
+    cube_face: Option<usize>,
+) {
+    let bind_target = if cube_face.is_some() {
+        glow::TEXTURE_CUBE_MAP
+    } else {
+        glow::TEXTURE_2D
+    };
+    // SAFETY: the frame's depth holds the light's view; the texture has size² storage.
+    unsafe {
+        gl.bind_framebuffer(glow::READ_FRAMEBUFFER, Some(frame.fbo));
+        gl.bind_texture(bind_target, Some(texture));
+        gl.copy_tex_sub_image_2d(
+            image_target(cube_face),
+            0,
+            0,
+            0,
+            0,
+            0,
+            size as i32,
+            size as i32,
+        );
+        gl.bind_texture(bind_target, None);
+        gl.bind_framebuffer(glow::READ_FRAMEBUFFER, None);
+    }
+}
+
+/// Whether the options draw maps into the frame's own depth buffer.
+pub fn copies_from_frame(o: &ShadowMapOptions) -> bool {
+    o.depth_source == DepthSource::Copy
+}

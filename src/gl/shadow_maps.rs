@@ -1,0 +1,165 @@
+//! Depth textures of shadow mapping, one per shadow view, kept across frames and reallocated only
+//! when their kind, size or precision change (so long runs create no GL objects).
+
+use crate::options::{Compare, DepthBits, Filter};
+use glow::HasContext;
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+struct MapKey {
+    cube: bool,
+    size: u32,
+    bits: DepthBits,
+}
+
+struct Slot {
+    texture: glow::Texture,
+    key: MapKey,
+}
+
+/// The depth textures and the framebuffer used to render into them (the FBO path).
+#[derive(Default)]
+pub struct ShadowMaps {
+    slots: Vec<Slot>,
+    fbo: Option<glow::Framebuffer>,
+}
+
+/// Internal format, format and type of a depth texture of `bits`.
+pub fn depth_format(bits: DepthBits) -> (u32, u32, u32) {
+    match bits {
+        DepthBits::D16 => (
+            glow::DEPTH_COMPONENT16,
+            glow::DEPTH_COMPONENT,
+            glow::UNSIGNED_SHORT,
+        ),
+        DepthBits::D24 => (
+            glow::DEPTH_COMPONENT24,
+            glow::DEPTH_COMPONENT,
+            glow::UNSIGNED_INT,
+        ),
+        DepthBits::D32f => (glow::DEPTH_COMPONENT32F, glow::DEPTH_COMPONENT, glow::FLOAT),
+    }
+}
+
+fn allocate(gl: &glow::Context, key: MapKey) -> Result<glow::Texture, String> {
+    let (internal, format, ty) = depth_format(key.bits);
+    // SAFETY: storage for a new texture; the binding is reset afterwards.
+    unsafe {
+        let t = gl.create_texture()?;
+        let target = if key.cube {
+            glow::TEXTURE_CUBE_MAP
+        } else {
+            glow::TEXTURE_2D
+        };
+        gl.bind_texture(target, Some(t));
+        let faces: Vec<u32> = if key.cube {
+            (0..6)
+                .map(|f| glow::TEXTURE_CUBE_MAP_POSITIVE_X + f)
+                .collect()
+        } else {
+            vec![glow::TEXTURE_2D]
+        };
+        for face in faces {
+            gl.tex_image_2d(
+                face,
+                0,
+                internal as i32,
+                key.size as i32,
+                key.size as i32,
+                0,
+                format,
+                ty,
+                glow::PixelUnpackData::Slice(None),
+            );
+        }
+        // GL_CLAMP in the paper: outside [0,1] the edge texels are read.
+        gl.tex_parameter_i32(target, glow::TEXTURE_WRAP_S, glow::CLAMP_TO_EDGE as i32);
+        gl.tex_parameter_i32(target, glow::TEXTURE_WRAP_T, glow::CLAMP_TO_EDGE as i32);
+        gl.tex_parameter_i32(target, glow::TEXTURE_WRAP_R, glow::CLAMP_TO_EDGE as i32);
+        gl.bind_texture(target, None);
+        Ok(t)
+    }
+}
+
+impl ShadowMaps {
+    /// The texture of slot `index`, (re)allocated to match.
+    pub fn slot(
+        &mut self,
+        gl: &glow::Context,
+        index: usize,
+        cube: bool,
+        size: u32,
+        bits: DepthBits,
+    ) -> Result<glow::Texture, String> {
+        let key = MapKey { cube, size, bits };
+        if index < self.slots.len() {
+            if self.slots[index].key != key {
+                let t = allocate(gl, key)?;
+                // SAFETY: the old texture is ours and no longer referenced.
+                unsafe { gl.delete_texture(self.slots[index].texture) };
+                self.slots[index] = Slot { texture: t, key };
+            }
+        } else {
+            while self.slots.len() <= index {
+                let t = allocate(gl, key)?;
+                self.slots.push(Slot { texture: t, key });
+            }
+        }
+        Ok(self.slots[index].texture)
+    }
+
+    /// Sampling state for the lit pass: compare mode (ARB_shadow) and filtering.
+    pub fn configure(
+        gl: &glow::Context,
+        texture: glow::Texture,
+        cube: bool,
+        compare: Compare,
+        filter: Filter,
+    ) {
+        let target = if cube {
+            glow::TEXTURE_CUBE_MAP
+        } else {
+            glow::TEXTURE_2D
+        };
+        let linear = filter == Filter::Hw2x2 && compare == Compare::Hardware;
+        let f = if linear { glow::LINEAR } else { glow::NEAREST } as i32;
+        // SAFETY: parameters of our texture.
+        unsafe {
+            gl.bind_texture(target, Some(texture));
+            gl.tex_parameter_i32(target, glow::TEXTURE_MIN_FILTER, f);
+            gl.tex_parameter_i32(target, glow::TEXTURE_MAG_FILTER, f);
+            let mode = match compare {
+                Compare::Hardware => glow::COMPARE_REF_TO_TEXTURE,
+                Compare::Shader => glow::NONE,
+            };
+            gl.tex_parameter_i32(target, glow::TEXTURE_COMPARE_MODE, mode as i32);
+            gl.tex_parameter_i32(target, glow::TEXTURE_COMPARE_FUNC, glow::LEQUAL as i32);
+        }
+    }
+
+    /// A depth-only framebuffer for rendering straight into the maps.
+    pub fn fbo(&mut self, gl: &glow::Context) -> Result<glow::Framebuffer, String> {
+        if let Some(f) = self.fbo {
+            return Ok(f);
+        }
+        // SAFETY: creating a framebuffer object.
+        let f = unsafe { gl.create_framebuffer()? };
+        self.fbo = Some(f);
+        Ok(f)
+    }
+
+    pub fn texture_count(&self) -> usize {
+        self.slots.len()
+    }
+
+    pub fn delete(&mut self, gl: &glow::Context) {
+        // SAFETY: called once by the owner.
+        unsafe {
+            for s in self.slots.drain(..) {
+                gl.delete_texture(s.texture);
+            }
+            if let Some(f) = self.fbo.take() {
+                gl.delete_framebuffer(f);
+            }
+        }
+    }
+}

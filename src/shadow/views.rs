@@ -1,0 +1,240 @@
+//! The light's "virtual cameras" of shadow mapping (thesis 2.2.2): one frustum per spot light, six
+//! 90° frusta or one cube for an omni light, with near and far fitted to the casters.
+
+use super::projection::{bias_matrix, cube_face_view, fit_near_far, look_along, perspective};
+use crate::options::{OmniMode, ShadowMapOptions};
+use crate::scene::{Aabb, Light, LightKind};
+use glam::{Mat4, Vec3, Vec4};
+
+/// Smallest near plane a fitted frustum gets, in world units.
+pub const MIN_NEAR: f32 = 1.0;
+/// Relative margin of fitted near and far planes around the casters.
+pub const FIT_MARGIN: f32 = 1.02;
+
+/// What a view covers of its light.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum ViewKind {
+    /// The spot light's cone.
+    Spot,
+    /// The directions of an omni light whose major axis is cube face `0..6` (+X, -X, +Y, -Y, +Z,
+    /// -Z): six such views partition the sphere.
+    Face(usize),
+    /// All six faces in one cube map.
+    Cube,
+}
+
+/// One shadow map's camera.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ShadowView {
+    pub kind: ViewKind,
+    /// World to light eye space (for cubes: unused, faces come from [`cube_face_view`]).
+    pub view: Mat4,
+    pub projection: Mat4,
+    pub near: f32,
+    pub far: f32,
+}
+
+impl ShadowView {
+    pub fn view_proj(&self) -> Mat4 {
+        self.projection * self.view
+    }
+
+    /// The paper's eye-linear texgen planes: T = B · P_light · V_light · V_camera⁻¹, taking camera
+    /// eye coordinates to shadow-map coordinates (s, t, r, q).
+    pub fn texgen(&self, camera_view: &Mat4) -> Mat4 {
+        bias_matrix() * self.projection * self.view * camera_view.inverse()
+    }
+
+    /// World-space planes `(n, d)` (n·p + d ≥ 0 inside) of the frustum's four sides and its near
+    /// plane, for clipping the lit pass (gl_ClipDistance).
+    pub fn clip_planes(&self) -> [Vec4; 5] {
+        let m = self.view_proj();
+        let (r0, r1, r2, r3) = (m.row(0), m.row(1), m.row(2), m.row(3));
+        [r3 + r0, r3 - r0, r3 + r1, r3 - r1, r3 + r2]
+    }
+}
+
+/// The cube face whose axis is the major axis of `d` (ties go to x, then y): the face partition
+/// the shaders use too.
+pub fn major_face(d: Vec3) -> usize {
+    let a = d.abs();
+    if a.x >= a.y && a.x >= a.z {
+        if d.x >= 0.0 { 0 } else { 1 }
+    } else if a.y >= a.z {
+        if d.y >= 0.0 { 2 } else { 3 }
+    } else if d.z >= 0.0 {
+        4
+    } else {
+        5
+    }
+}
+
+/// Near and far for a view: fitted to the boxes of casters within the light's radius
+/// (thesis 2.2.2), or near 1 and far = radius when fitting is off.
+fn near_far(view: &Mat4, light: &Light, casters: &[Aabb], fit: bool) -> (f32, f32) {
+    if !fit {
+        return (MIN_NEAR, light.radius.max(MIN_NEAR * 2.0));
+    }
+    let reach = Aabb {
+        min: light.position - light.radius,
+        max: light.position + light.radius,
+    };
+    let corners = casters
+        .iter()
+        .filter(|b| {
+            !b.is_empty()
+                && b.min.x <= reach.max.x
+                && b.max.x >= reach.min.x
+                && b.min.y <= reach.max.y
+                && b.max.y >= reach.min.y
+                && b.min.z <= reach.max.z
+                && b.max.z >= reach.min.z
+        })
+        .flat_map(|b| b.corners());
+    let (near, far) = fit_near_far(view, corners, MIN_NEAR);
+    // Nothing is lit beyond the radius, so no depth beyond it matters. A 2% margin keeps the
+    // nearest and farthest casters off the planes themselves, where the polygon offset would push
+    // them out (fixed-point maps hide that by clamping the compared depth; 32F maps do not).
+    let near = (near / FIT_MARGIN).max(MIN_NEAR);
+    let far = (far.min(light.radius) * FIT_MARGIN).max(near * FIT_MARGIN * FIT_MARGIN);
+    (near, far)
+}
+
+/// The shadow views of `light`; `casters` are the world bounds of casting surfaces.
+pub fn shadow_views(
+    light: &Light,
+    casters: &[Aabb],
+    options: &ShadowMapOptions,
+) -> Vec<ShadowView> {
+    match light.kind {
+        LightKind::Spot {
+            direction,
+            cutoff_deg,
+        } => {
+            let view = look_along(light.position, direction);
+            let (near, far) = near_far(&view, light, casters, options.fit_near_far);
+            // Thesis 2.2.2: the viewing angle is twice the cutoff angle.
+            let fov = (2.0 * cutoff_deg * options.fov_scale)
+                .clamp(1.0, 179.0)
+                .to_radians();
+            vec![ShadowView {
+                kind: ViewKind::Spot,
+                view,
+                projection: perspective(fov, 1.0, near, far),
+                near,
+                far,
+            }]
+        }
+        LightKind::Omni => {
+            let fov = (90.0 * options.fov_scale).clamp(1.0, 179.0).to_radians();
+            let faces: Vec<ShadowView> = (0..6)
+                .map(|f| {
+                    let view = cube_face_view(light.position, f);
+                    let (near, far) = near_far(&view, light, casters, options.fit_near_far);
+                    ShadowView {
+                        kind: ViewKind::Face(f),
+                        view,
+                        projection: perspective(fov, 1.0, near, far),
+                        near,
+                        far,
+                    }
+                })
+                .collect();
+            match options.omni {
+                OmniMode::SixSpots => faces,
+                OmniMode::Cube => {
+                    // One range for all faces: a cube map is compared with one projection.
+                    let near = faces.iter().map(|f| f.near).fold(f32::INFINITY, f32::min);
+                    let far = faces.iter().map(|f| f.far).fold(0.0, f32::max);
+                    vec![ShadowView {
+                        kind: ViewKind::Cube,
+                        view: Mat4::from_translation(-light.position),
+                        projection: perspective(std::f32::consts::FRAC_PI_2, 1.0, near, far),
+                        near,
+                        far,
+                    }]
+                }
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_spot_gets_one_view_of_twice_its_cutoff() {
+        let light = Light::spot("s", Vec3::new(0.0, 0.0, 100.0), Vec3::ZERO, 30.0, 500.0);
+        let boxes = [Aabb {
+            min: Vec3::new(-100.0, -100.0, -1.0),
+            max: Vec3::new(100.0, 100.0, 0.0),
+        }];
+        let v = shadow_views(&light, &boxes, &ShadowMapOptions::default());
+        assert_eq!(v.len(), 1);
+        // The floor lies 100 to 101 units below: the fitted range encloses it with its margin.
+        assert!((v[0].near - 100.0 / FIT_MARGIN).abs() < 1e-3, "near {}", v[0].near);
+        assert!((v[0].far - 101.0 * FIT_MARGIN).abs() < 1e-3, "far {}", v[0].far);
+        // A point at 29.9° off the axis projects inside the map; the edge of the FOV is at 30°.
+        let p = Vec3::new(100.0 * 29.9f32.to_radians().tan(), 0.0, 0.0);
+        let c = v[0].view_proj() * p.extend(1.0);
+        assert!(c.x.abs() < c.w && c.x.abs() > 0.99 * c.w);
+    }
+
+    #[test]
+    fn fitting_off_uses_the_radius() {
+        let light = Light::omni("o", Vec3::ZERO, 300.0);
+        let o = ShadowMapOptions {
+            fit_near_far: false,
+            ..ShadowMapOptions::default()
+        };
+        let v = shadow_views(&light, &[], &o);
+        assert_eq!(v.len(), 6);
+        assert!(v.iter().all(|f| f.near == MIN_NEAR && f.far == 300.0));
+    }
+
+    #[test]
+    fn the_six_faces_partition_directions_and_each_contains_its_share() {
+        let light = Light::omni("o", Vec3::new(5.0, 6.0, 7.0), 1000.0);
+        let v = shadow_views(&light, &[], &ShadowMapOptions::default());
+        for i in 0..500 {
+            let t = i as f32 * 0.618;
+            let d =
+                Vec3::new(t.sin() * 3.0, (t * 1.7).cos() * 2.0, (t * 0.3).sin() - 0.2).normalize();
+            let f = major_face(d);
+            let c = v[f].view_proj() * (light.position + d * 50.0).extend(1.0);
+            assert!(
+                c.w > 0.0 && c.x.abs() <= c.w * 1.0001 && c.y.abs() <= c.w * 1.0001,
+                "{d} face {f}"
+            );
+        }
+        assert_eq!(major_face(Vec3::new(1.0, 1.0, 0.0)), 0, "ties go to x");
+        assert_eq!(major_face(Vec3::new(0.0, -1.0, 1.0)), 3, "then to y");
+    }
+
+    #[test]
+    fn texgen_maps_eye_space_to_the_unit_cube() {
+        let light = Light::spot("s", Vec3::new(0.0, 0.0, 100.0), Vec3::ZERO, 30.0, 500.0);
+        let unfitted = ShadowMapOptions {
+            fit_near_far: false,
+            ..ShadowMapOptions::default()
+        };
+        let v = shadow_views(&light, &[], &unfitted)[0];
+        let camera_view = Mat4::look_at_rh(Vec3::new(50.0, -80.0, 60.0), Vec3::ZERO, Vec3::Z);
+        let eye = camera_view.transform_point3(Vec3::ZERO);
+        let t = v.texgen(&camera_view) * eye.extend(1.0);
+        // The spot's target is the centre of its map.
+        assert!((t.x / t.w - 0.5).abs() < 1e-5 && (t.y / t.w - 0.5).abs() < 1e-5);
+        assert!(t.z / t.w > 0.0 && t.z / t.w < 1.0);
+    }
+
+    #[test]
+    fn clip_planes_keep_the_inside() {
+        let light = Light::spot("s", Vec3::new(0.0, 0.0, 100.0), Vec3::ZERO, 30.0, 500.0);
+        let v = shadow_views(&light, &[], &ShadowMapOptions::default())[0];
+        let inside = Vec3::new(10.0, 10.0, 0.0).extend(1.0);
+        let outside = Vec3::new(80.0, 0.0, 0.0).extend(1.0);
+        assert!(v.clip_planes().iter().all(|p| p.dot(inside) >= 0.0));
+        assert!(v.clip_planes().iter().any(|p| p.dot(outside) < 0.0));
+    }
+}
