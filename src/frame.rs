@@ -108,6 +108,8 @@ pub struct Frame {
     pub gbuffer: Option<GBuffer>,
     /// Each planned light's decision per pixel (when masks were requested).
     pub masks: Vec<Mask>,
+    /// Shadow-volume work per light (shadow volumes only).
+    pub volumes: Vec<crate::gl::volumes::VolumeStats>,
 }
 
 impl Frame {

@@ -281,6 +281,91 @@ option_enum! {
         None = "none",
         /// Shadow mapping (paper section 3).
         ShadowMap = "shadow_map",
+        /// Stenciled shadow volumes (paper section 4).
+        ShadowVolume = "shadow_volume",
+    }
+}
+
+option_enum! {
+    /// Where stencil counting happens.
+    pub enum CountingMode {
+        /// Depth-fail, Carmack's reverse: back faces increment and front faces decrement where the
+        /// depth test fails; needs capped volumes, works with the camera inside (the paper).
+        Zfail = "zfail",
+        /// Depth-pass: front faces increment and back faces decrement where it passes; no caps,
+        /// wrong when the camera is inside a volume.
+        Zpass = "zpass",
+        /// Per caster: depth-pass where the view cannot be inside its shadow (Doom 3's test),
+        /// depth-fail elsewhere (what the paper says it should have done).
+        Auto = "auto",
+    }
+}
+
+option_enum! {
+    /// How the volumes reach the stencil buffer.
+    pub enum StencilPasses {
+        /// Back faces in one pass, front faces in another (the paper: no two-sided stencil).
+        TwoPass = "two_pass",
+        /// One pass with glStencilOpSeparate for front and back faces; always with wrapping
+        /// arithmetic, since interleaved faces would underflow saturating counts.
+        Separate = "separate",
+    }
+}
+
+option_enum! {
+    /// Stencil arithmetic at 0 and 255.
+    pub enum StencilWrap {
+        /// INCR / DECR clamp (the paper's card lacked EXT_stencil_wrap).
+        Saturate = "saturate",
+        /// INCR_WRAP / DECR_WRAP.
+        Wrap = "wrap",
+    }
+}
+
+option_enum! {
+    /// Which edges become volume sides.
+    pub enum EdgeRule {
+        /// The paper's world rule: skip an edge only when exactly two triangles share it and both
+        /// face the light; otherwise each facing triangle on it extrudes it.
+        Paper = "paper",
+        /// Every edge of every facing triangle (the paper's first, brute-force fix).
+        All = "all",
+        /// The textbook 2-manifold rule: an edge is a silhouette when exactly one of its first two
+        /// triangles faces the light; open edges never are (it leaks on Quake 3 worlds).
+        Manifold = "manifold",
+    }
+}
+
+option_enum! {
+    /// Where extruded vertices go.
+    pub enum Extrusion {
+        /// To infinity, w = 0 (paper 4.1).
+        Infinite = "infinite",
+        /// shadow_volume.finite_distance away from the light.
+        Finite = "finite",
+    }
+}
+
+option_enum! {
+    /// The camera projection under shadow volumes.
+    pub enum VolumeProjection {
+        /// The far plane at infinity, P = lim f→∞ (paper 4.1).
+        Infinite = "infinite",
+        /// Doom 3's form: third row crunched by ε = 0.001, so w = 0 points stay inside the far plane.
+        InfiniteEpsilon = "infinite_epsilon",
+        /// A finite far plane beyond the scene, with GL_DEPTH_CLAMP while volumes are drawn.
+        DepthClamp = "depth_clamp",
+    }
+}
+
+option_enum! {
+    /// How shadowed pixels are shaded.
+    pub enum VolumeShading {
+        /// Each light's additive pass where the stencil is 0 (the paper).
+        Additive = "additive",
+        /// Bestimt and Freitag: light everything, then a full-screen quad darkens stencil > 0
+        /// pixels (DESTCOLOR x 0.878) and zeroes the stencil as it goes.
+        Fill = "fill",
     }
 }
 
@@ -491,6 +576,33 @@ define_options! {
         omni: OmniMode = OmniMode::SixSpots;
         /// Alpha-tested casters: alpha test in the depth pass, or drawn solid.
         alpha_casters: AlphaCasters = AlphaCasters::Test;
+    }
+
+    /// Stenciled shadow volumes (paper section 4, thesis chapter 3). Defaults: the paper's pipeline.
+    group shadow_volume: ShadowVolumeOptions {
+        /// Stencil counting: zfail (paper), zpass (no caps), or auto per caster.
+        counting: CountingMode = CountingMode::Zfail;
+        /// Two stencil passes (paper) or one pass with separate front and back operations.
+        stencil: StencilPasses = StencilPasses::TwoPass;
+        /// Saturating INCR/DECR (the paper's card) or INCR_WRAP/DECR_WRAP (two-pass only: one
+        /// pass always wraps).
+        wrap: StencilWrap = StencilWrap::Saturate;
+        /// Which edges become sides: the paper's world rule, every edge, or the naive manifold rule.
+        edge_rule: EdgeRule = EdgeRule::Paper;
+        /// Extrude to infinity (w = 0, paper) or by a finite distance.
+        extrusion: Extrusion = Extrusion::Infinite;
+        /// Distance of finite extrusion, in world units.
+        finite_distance: f32 = 1000.0, in 1.0 ..= 1000000.0;
+        /// Camera projection: infinite far plane (paper), Doom 3's epsilon form, or depth clamp.
+        projection: VolumeProjection = VolumeProjection::Infinite;
+        /// Draw volumes with glPolygonOffset(0, 1) away from the camera (Doom 3).
+        depth_offset: bool = false;
+        /// Forsyth's fix for chopped Gouraud shading: a triangle faces the light when N.L > -eps.
+        facing_epsilon: f32 = 0.0, in 0.0 ..= 1.0;
+        /// Additive lit pass where stencil = 0 (paper) or Bestimt and Freitag's fill quad.
+        shading: VolumeShading = VolumeShading::Additive;
+        /// Rebuild a light's volumes only when the light or a caster moved.
+        caching: bool = true;
     }
 
     /// Loading Quake 3 maps and models (applied when a scene is loaded).

@@ -11,6 +11,7 @@ pub mod shadow_maps;
 pub mod target;
 pub mod timing;
 pub mod upload;
+pub mod volumes;
 pub mod window;
 
 pub use context::{Backend, ContextError, GlContext, create_context};

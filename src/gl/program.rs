@@ -32,6 +32,10 @@ pub mod sources {
     pub const SHADOW: &str = include_str!("../../shaders/shadow.glsl");
     pub const DEPTH_VERT: &str = include_str!("../../shaders/depth.vert");
     pub const DEPTH_FRAG: &str = include_str!("../../shaders/depth.frag");
+    pub const VOLUME_VERT: &str = include_str!("../../shaders/volume.vert");
+    pub const VOLUME_FRAG: &str = include_str!("../../shaders/volume.frag");
+    pub const FULLSCREEN_VERT: &str = include_str!("../../shaders/fullscreen.vert");
+    pub const FILL_FRAG: &str = include_str!("../../shaders/fill.frag");
 }
 
 /// `#version`, the variant's defines, the shared helpers, then the stage's source.

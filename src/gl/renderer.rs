@@ -7,7 +7,7 @@
 //! timed frame.
 
 use super::caps::{self, Caps};
-use super::passes::lit::ShadowBinding;
+use super::passes::lit::{LitShadow, ShadowBinding};
 use super::passes::shadow_map::{DepthTarget, copies_from_frame, copy_depth};
 use super::passes::{self, PassContext};
 use super::program::{Program, ProgramError, sources};
@@ -15,8 +15,11 @@ use super::shadow_maps::ShadowMaps;
 use super::target::{Framebuffer, GBufferTarget, MaskTarget};
 use super::timing::PassTimer;
 use super::upload::GpuScene;
+use super::volumes::{VolumeCache, VolumeStats};
 use crate::frame::{Frame, GBuffer, Mask};
-use crate::options::{Compare, CompareResult, DepthBits, Filter, Options, Outside, Technique};
+use crate::options::{
+    Compare, CompareResult, DepthBits, Filter, Options, Outside, Technique, VolumeShading,
+};
 use crate::plan::{LightPlan, Plan};
 use crate::scene::{Camera, Scene};
 use crate::shadow::projection::cube_face_view;
@@ -82,10 +85,15 @@ fn lit_defines(options: &Options, cube: bool, mask: bool) -> Vec<&'static str> {
     d
 }
 
+/// Bestimt and Freitag's fill colour (their 0x00E0E0E0 with DESTCOLOR blending).
+pub const FILL_SHADE: f32 = 224.0 / 255.0;
+
 struct Programs {
     unlit: Program,
     gbuffer: Program,
     depth: Program,
+    volume: Program,
+    fill: Program,
     /// Lit programs by their define set, compiled on first use.
     lit: HashMap<String, Program>,
 }
@@ -101,6 +109,20 @@ impl Programs {
                 "depth",
                 sources::DEPTH_VERT,
                 Some(sources::DEPTH_FRAG),
+                &[],
+            )?,
+            volume: Program::new(
+                gl,
+                "volume",
+                sources::VOLUME_VERT,
+                Some(sources::VOLUME_FRAG),
+                &[],
+            )?,
+            fill: Program::new(
+                gl,
+                "fill",
+                sources::FULLSCREEN_VERT,
+                Some(sources::FILL_FRAG),
                 &[],
             )?,
             lit: HashMap::new(),
@@ -133,7 +155,13 @@ impl Programs {
     }
 
     fn delete(&mut self, gl: &glow::Context) {
-        for p in [&self.unlit, &self.gbuffer, &self.depth] {
+        for p in [
+            &self.unlit,
+            &self.gbuffer,
+            &self.depth,
+            &self.volume,
+            &self.fill,
+        ] {
             p.delete(gl);
         }
         for p in self.lit.values() {
@@ -151,8 +179,11 @@ pub struct Renderer {
     gpu: Option<GpuScene>,
     timer: PassTimer,
     shadow_maps: ShadowMaps,
+    volumes: VolumeCache,
     /// Created on the first frame that asks for masks.
     measure_targets: Option<(GBufferTarget, MaskTarget)>,
+    /// Core profile draws need a bound VAO even without attributes (full-screen triangles).
+    empty_vao: glow::VertexArray,
 }
 
 /// One shadow-mapped view's texture, by light plan and view index.
@@ -168,6 +199,8 @@ impl Renderer {
         let target = Framebuffer::new(&gl, width, height).map_err(RenderError::Gl)?;
         let caps = caps::probe(&gl, target.depth_stencil_bits(&gl));
         let programs = Programs::new(&gl)?;
+        // SAFETY: creating an empty vertex array object.
+        let empty_vao = unsafe { gl.create_vertex_array() }.map_err(RenderError::Gl)?;
         let timer = PassTimer::new(caps.has("timer_query"));
         Ok(Renderer {
             gl,
@@ -177,7 +210,9 @@ impl Renderer {
             gpu: None,
             timer,
             shadow_maps: ShadowMaps::default(),
+            volumes: VolumeCache::default(),
             measure_targets: None,
+            empty_vao,
         })
     }
 
@@ -404,6 +439,27 @@ impl Renderer {
             }
         }
 
+        // Shadow volumes: built on the CPU (or reused) before any drawing.
+        let mut volume_stats: Vec<VolumeStats> = Vec::new();
+        for lp in plan
+            .lights
+            .iter()
+            .filter(|l| l.technique == Technique::ShadowVolume)
+        {
+            let v = self
+                .volumes
+                .prepare(gl, scene, lp, &options.shadow_volume)
+                .map_err(RenderError::Gl)?;
+            let build_ms = if v.stats.rebuilt {
+                v.stats.build_ms
+            } else {
+                0.0
+            };
+            self.timer
+                .record_cpu(format!("light{}.volume_build", lp.light), build_ms);
+            volume_stats.push(v.stats);
+        }
+
         self.timer.begin(gl, "base");
         self.target.bind(gl);
         passes::base::draw(&ctx, &self.programs.unlit);
@@ -423,15 +479,35 @@ impl Renderer {
                 })
                 .collect()
         };
+        let fill = options.shadow_volume.shading == VolumeShading::Fill;
         for (pi, lp) in plan.lights.iter().enumerate() {
-            self.timer.begin(gl, format!("light{}.lit", lp.light));
-            self.draw_light(
-                &ctx,
-                lp,
-                &bindings(pi),
-                |cube| lit_program(cube, false),
-                false,
-            );
+            match (lp.technique, self.volumes.get(lp.light)) {
+                (Technique::ShadowVolume, Some(v)) => {
+                    self.timer.begin(gl, format!("light{}.stencil", lp.light));
+                    passes::stencil::draw(&ctx, &self.programs.volume, v);
+                    self.timer.begin(gl, format!("light{}.lit", lp.light));
+                    passes::lit::draw(
+                        &ctx,
+                        lit_program(false, false),
+                        lp,
+                        &LitShadow::Stencil { test: !fill },
+                    );
+                    if fill {
+                        self.timer.begin(gl, format!("light{}.fill", lp.light));
+                        passes::stencil::fill(gl, &self.programs.fill, self.empty_vao, FILL_SHADE);
+                    }
+                }
+                _ => {
+                    self.timer.begin(gl, format!("light{}.lit", lp.light));
+                    draw_maps(
+                        &ctx,
+                        lp,
+                        &bindings(pi),
+                        |cube| lit_program(cube, false),
+                        false,
+                    );
+                }
+            }
         }
         let passes = self.timer.finish(gl);
         // SAFETY: waits for the frame; no state change.
@@ -459,13 +535,24 @@ impl Renderer {
                         gl.clear_color(0.0, 0.0, 0.0, 0.0);
                         gl.clear(glow::COLOR_BUFFER_BIT);
                     }
-                    self.draw_light(
-                        &ctx,
-                        lp,
-                        &bindings(pi),
-                        |cube| lit_program(cube, true),
-                        true,
-                    );
+                    match (lp.technique, self.volumes.get(lp.light)) {
+                        (Technique::ShadowVolume, Some(v)) => {
+                            passes::stencil::draw(&ctx, &self.programs.volume, v);
+                            passes::lit::draw_mask(
+                                &ctx,
+                                lit_program(false, true),
+                                lp,
+                                &LitShadow::Stencil { test: true },
+                            );
+                        }
+                        _ => draw_maps(
+                            &ctx,
+                            lp,
+                            &bindings(pi),
+                            |cube| lit_program(cube, true),
+                            true,
+                        ),
+                    }
                     masks.push(Mask {
                         light: lp.light,
                         width: mtarget.width,
@@ -486,31 +573,8 @@ impl Renderer {
             frame_ms,
             gbuffer,
             masks,
+            volumes: volume_stats,
         })
-    }
-
-    /// One light's lit (or mask) passes: one per shadow view, or one without shadows.
-    fn draw_light<'p>(
-        &self,
-        ctx: &PassContext,
-        lp: &LightPlan,
-        bindings: &[(bool, ShadowBinding)],
-        program: impl Fn(bool) -> &'p Program,
-        mask: bool,
-    ) {
-        let pass = |p: &Program, s: Option<&ShadowBinding>| {
-            if mask {
-                passes::lit::draw_mask(ctx, p, lp, s);
-            } else {
-                passes::lit::draw(ctx, p, lp, s);
-            }
-        };
-        if bindings.is_empty() {
-            pass(program(false), None);
-        }
-        for (cube, b) in bindings {
-            pass(program(*cube), Some(b));
-        }
     }
 
     /// Draws the last frame into the default framebuffer of a window, scaled to `width`×`height`.
@@ -535,6 +599,29 @@ impl Renderer {
             );
             gl.bind_framebuffer(glow::FRAMEBUFFER, None);
         }
+    }
+}
+
+/// One light's lit (or mask) passes: one per shadow map view, or one without shadows.
+fn draw_maps<'p>(
+    ctx: &PassContext,
+    lp: &LightPlan,
+    bindings: &[(bool, ShadowBinding)],
+    program: impl Fn(bool) -> &'p Program,
+    mask: bool,
+) {
+    let pass = |p: &Program, s: &LitShadow| {
+        if mask {
+            passes::lit::draw_mask(ctx, p, lp, s);
+        } else {
+            passes::lit::draw(ctx, p, lp, s);
+        }
+    };
+    if bindings.is_empty() {
+        pass(program(false), &LitShadow::None);
+    }
+    for (cube, b) in bindings {
+        pass(program(*cube), &LitShadow::Map(b));
     }
 }
 
@@ -571,10 +658,13 @@ impl Drop for Renderer {
         self.programs.delete(gl);
         self.target.delete(gl);
         self.shadow_maps.delete(gl);
+        self.volumes.delete(gl);
         if let Some((g, m)) = self.measure_targets.take() {
             g.delete(gl);
             m.delete(gl);
         }
         self.timer.delete(gl);
+        // SAFETY: deleting our own VAO once.
+        unsafe { gl.delete_vertex_array(self.empty_vao) };
     }
 }

@@ -4,11 +4,12 @@
 
 pub mod frustum;
 
-use crate::options::{Options, Technique};
+use crate::options::{CountingMode, Options, Technique, VolumeProjection};
 use crate::q3::vis::VisStats;
 use crate::scene::{Aabb, Camera, Scene, SurfaceOwner};
 use crate::shadow::projection;
 use crate::shadow::views::{ShadowView, shadow_views};
+use crate::shadow::volume::{self, Counting};
 use frustum::Frustum;
 use glam::{Mat3, Mat4, Vec3};
 use serde::Serialize;
@@ -24,12 +25,36 @@ pub struct CameraSetup {
     pub height: u32,
 }
 
+/// Lengyel's epsilon in the Doom 3 form of the infinite projection (third row -0.999).
+pub const DOOM3_EPSILON: f32 = 0.001;
+
 impl CameraSetup {
+    /// The paper's camera: far plane at infinity (section 4.1), so nothing is ever far-clipped.
     pub fn new(c: &Camera, width: u32, height: u32) -> CameraSetup {
+        CameraSetup::with_projection(c, width, height, VolumeProjection::Infinite, 0.0)
+    }
+
+    /// A camera with the shadow-volume projection choice; `scene_far` is the finite far plane of
+    /// the depth-clamp form.
+    pub fn with_projection(
+        c: &Camera,
+        width: u32,
+        height: u32,
+        kind: VolumeProjection,
+        scene_far: f32,
+    ) -> CameraSetup {
         let aspect = width as f32 / height as f32;
         let view = c.view();
-        // The paper's camera: far plane at infinity (section 4.1), so nothing is ever far-clipped.
-        let projection = projection::perspective_infinite(c.fov_y(aspect), aspect, c.near);
+        let fov = c.fov_y(aspect);
+        let projection = match kind {
+            VolumeProjection::Infinite => projection::perspective_infinite(fov, aspect, c.near),
+            VolumeProjection::InfiniteEpsilon => {
+                projection::perspective_infinite_epsilon(fov, aspect, c.near, DOOM3_EPSILON)
+            }
+            VolumeProjection::DepthClamp => {
+                projection::perspective(fov, aspect, c.near, scene_far.max(c.near * 2.0))
+            }
+        };
         CameraSetup {
             position: c.position,
             view,
@@ -39,6 +64,15 @@ impl CameraSetup {
             height,
         }
     }
+}
+
+/// One caster component's volume for one light.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct VolumePart {
+    /// Index into the scene's caster groups.
+    pub group: usize,
+    pub component: usize,
+    pub counting: Counting,
 }
 
 /// One light's work this frame.
@@ -51,6 +85,8 @@ pub struct LightPlan {
     pub order: usize,
     /// Shadow-map views (shadow mapping only).
     pub views: Vec<ShadowView>,
+    /// Volume parts (shadow volumes only).
+    pub volumes: Vec<VolumePart>,
 }
 
 /// What the plan decided, for stats overlays and bench JSON.
@@ -83,7 +119,24 @@ impl Plan {
 
     /// The plan for `camera` (a camera path's frame, the viewer's camera).
     pub fn build_at(scene: &Scene, camera: &Camera, options: &Options) -> Plan {
-        let camera = CameraSetup::new(camera, options.width, options.height);
+        let camera = if options.technique == Technique::ShadowVolume {
+            let far = scene
+                .bounds()
+                .corners()
+                .iter()
+                .map(|c| c.distance(camera.position))
+                .fold(0.0f32, f32::max)
+                * 1.01;
+            CameraSetup::with_projection(
+                camera,
+                options.width,
+                options.height,
+                options.shadow_volume.projection,
+                far,
+            )
+        } else {
+            CameraSetup::new(camera, options.width, options.height)
+        };
         let frustum = options
             .culling
             .frustum
@@ -135,19 +188,60 @@ impl Plan {
                 .map(|(s, _)| s.bounds)
                 .collect(),
         };
+        // Shadow-volume casters, with their world bounds (for the depth-pass safety test).
+        let groups = (options.technique == Technique::ShadowVolume).then(|| scene.caster_groups());
+        let components: Vec<(usize, usize, Aabb)> = groups
+            .iter()
+            .flat_map(|g| g.groups.iter().enumerate())
+            .flat_map(|(gi, g)| {
+                let t = volume::group_transform(scene, g.owner);
+                g.components
+                    .iter()
+                    .enumerate()
+                    .map(move |(ci, c)| (gi, ci, c.bounds.transformed(&t)))
+            })
+            .collect();
+        let eye = camera.position;
+        let near = scene.camera.near;
         let lights = (0..scene.lights.len())
             .filter(|&i| options.light_enabled(i))
             .enumerate()
-            .map(|(order, light)| LightPlan {
-                light,
-                technique: options.technique,
-                order,
-                views: match options.technique {
-                    Technique::ShadowMap => {
-                        shadow_views(&scene.lights[light], &caster_bounds, &options.shadow_map)
-                    }
-                    Technique::None => Vec::new(),
-                },
+            .map(|(order, light)| {
+                let l = &scene.lights[light];
+                LightPlan {
+                    light,
+                    technique: options.technique,
+                    order,
+                    views: match options.technique {
+                        Technique::ShadowMap => {
+                            shadow_views(l, &caster_bounds, &options.shadow_map)
+                        }
+                        _ => Vec::new(),
+                    },
+                    volumes: match options.technique {
+                        Technique::ShadowVolume => components
+                            .iter()
+                            .map(|&(group, component, bounds)| VolumePart {
+                                group,
+                                component,
+                                counting: match options.shadow_volume.counting {
+                                    CountingMode::Zfail => Counting::ZFail,
+                                    CountingMode::Zpass => Counting::ZPass,
+                                    CountingMode::Auto => {
+                                        if volume::potentially_inside_shadow(
+                                            &bounds, eye, l.position, near,
+                                        ) {
+                                            Counting::ZFail
+                                        } else {
+                                            Counting::ZPass
+                                        }
+                                    }
+                                },
+                            })
+                            .collect(),
+                        _ => Vec::new(),
+                    },
+                }
             })
             .collect();
         Plan {

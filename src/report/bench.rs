@@ -7,6 +7,7 @@
 //! reused by every configuration).
 
 use crate::frame::{Frame, Mask};
+use crate::gl::volumes::VolumeStats;
 use crate::gl::{FrameRequest, RenderError, Renderer};
 use crate::options::{OptionError, Options, Technique};
 use crate::scene::Scene;
@@ -153,6 +154,8 @@ pub struct BenchRow {
     pub clock: String,
     pub error: ErrorRow,
     pub error_per_light: Vec<(usize, ErrorRow)>,
+    /// Shadow-volume work per light (quads, caps, build time), from the error frame.
+    pub volumes: Vec<VolumeStats>,
 }
 
 /// Sums per-light passes into `lights.<stage>` entries, next to the passes themselves.
@@ -167,6 +170,14 @@ pub fn pass_totals(frame: &Frame) -> BTreeMap<String, f64> {
         }
     }
     out
+}
+
+/// One configuration's error on the path's first frame: all lights, per light, and the volume
+/// work of that frame.
+struct FrameError {
+    total: Counts,
+    per_light: Vec<(usize, Counts)>,
+    volumes: Vec<VolumeStats>,
 }
 
 struct Measured {
@@ -247,8 +258,8 @@ impl<'a> Bench<'a> {
         Ok(ms)
     }
 
-    /// Error of `options` on the first frame of the path.
-    fn error(&mut self, options: &Options) -> Result<(Counts, Vec<(usize, Counts)>), RenderError> {
+    /// Error of `options` on the first frame of the path, with that frame's volume stats.
+    fn error(&mut self, options: &Options) -> Result<FrameError, RenderError> {
         let camera = self.settings.path[0].apply(&self.scene.camera);
         let frame =
             self.renderer
@@ -277,7 +288,11 @@ impl<'a> Bench<'a> {
             total.add(&c);
             per_light.push((mask.light, c));
         }
-        Ok((total, per_light))
+        Ok(FrameError {
+            total,
+            per_light,
+            volumes: frame.volumes.clone(),
+        })
     }
 
     /// Measures every configuration.
@@ -305,7 +320,11 @@ impl<'a> Bench<'a> {
                 let off = self.baseline(&c.options)?;
                 (off, self.measure(&c.options)?)
             };
-            let (total, per_light) = self.error(&c.options)?;
+            let FrameError {
+                total,
+                per_light,
+                volumes,
+            } = self.error(&c.options)?;
             let frame_ms = stats(&m.frame_ms);
             rows.push(BenchRow {
                 scene: self.scene.name.clone(),
@@ -335,6 +354,7 @@ impl<'a> Bench<'a> {
                     .iter()
                     .map(|(l, c)| (*l, ErrorRow::from(c)))
                     .collect(),
+                volumes,
             });
             bar.inc(1);
         }

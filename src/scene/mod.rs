@@ -279,6 +279,8 @@ pub struct Scene {
     pub options: toml::Table,
     /// BSP visibility of a Quake 3 world (None for built-in scenes: everything is visible).
     pub world: Option<std::sync::Arc<crate::q3::vis::WorldVis>>,
+    /// Shadow-volume connectivity of the casters, built on first use (see [`Scene::caster_groups`]).
+    pub caster_cache: std::sync::OnceLock<std::sync::Arc<crate::shadow::volume::CasterGroups>>,
 }
 
 impl Scene {
@@ -344,6 +346,19 @@ impl Scene {
                 ([p(tri[0]), p(tri[1]), p(tri[2])], si)
             })
         })
+    }
+
+    /// Welded casters with their edges and components, built once (model transforms are applied
+    /// later, so moving a model keeps them valid; adding surfaces must call
+    /// [`Scene::invalidate_casters`]).
+    pub fn caster_groups(&self) -> std::sync::Arc<crate::shadow::volume::CasterGroups> {
+        self.caster_cache
+            .get_or_init(|| std::sync::Arc::new(crate::shadow::volume::CasterGroups::build(self)))
+            .clone()
+    }
+
+    pub fn invalidate_casters(&mut self) {
+        self.caster_cache = std::sync::OnceLock::new();
     }
 
     /// Number of triangles drawn.

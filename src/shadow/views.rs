@@ -173,8 +173,16 @@ mod tests {
         let v = shadow_views(&light, &boxes, &ShadowMapOptions::default());
         assert_eq!(v.len(), 1);
         // The floor lies 100 to 101 units below: the fitted range encloses it with its margin.
-        assert!((v[0].near - 100.0 / FIT_MARGIN).abs() < 1e-3, "near {}", v[0].near);
-        assert!((v[0].far - 101.0 * FIT_MARGIN).abs() < 1e-3, "far {}", v[0].far);
+        assert!(
+            (v[0].near - 100.0 / FIT_MARGIN).abs() < 1e-3,
+            "near {}",
+            v[0].near
+        );
+        assert!(
+            (v[0].far - 101.0 * FIT_MARGIN).abs() < 1e-3,
+            "far {}",
+            v[0].far
+        );
         // A point at 29.9° off the axis projects inside the map; the edge of the FOV is at 30°.
         let p = Vec3::new(100.0 * 29.9f32.to_radians().tan(), 0.0, 0.0);
         let c = v[0].view_proj() * p.extend(1.0);

@@ -82,6 +82,12 @@ fn near_boundary(reference: &Mask, x: u32, y: u32) -> bool {
 
 /// Compares one light's renderer mask with the reference mask of the same light and frame.
 pub fn compare(rendered: &Mask, reference: &Mask) -> Counts {
+    compare_where(rendered, reference, |_| true)
+}
+
+/// [`compare`] over the pixels (row-major indices) that `include` admits; the boundary band is
+/// still judged on the whole reference.
+pub fn compare_where(rendered: &Mask, reference: &Mask, include: impl Fn(usize) -> bool) -> Counts {
     assert_eq!(
         (rendered.width, rendered.height),
         (reference.width, reference.height),
@@ -90,6 +96,9 @@ pub fn compare(rendered: &Mask, reference: &Mask) -> Counts {
     let mut c = Counts::default();
     for y in 0..reference.height {
         for x in 0..reference.width {
+            if !include((y * reference.width + x) as usize) {
+                continue;
+            }
             let (r, t) = (rendered.get(x, y), reference.get(x, y));
             match (r, t) {
                 (MaskValue::NotReceiver, MaskValue::NotReceiver) => continue,

@@ -5,5 +5,5 @@ pub mod metrics;
 pub mod reference;
 
 pub use masks::{Tracing, reference_mask};
-pub use metrics::{Counts, Rates, compare, error_image};
+pub use metrics::{Counts, Rates, compare, compare_where, error_image};
 pub use reference::Reference;

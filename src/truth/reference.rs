@@ -94,6 +94,12 @@ pub struct Reference {
 impl Reference {
     /// Every triangle of every visible, casting surface, in world space.
     pub fn build(scene: &Scene) -> Reference {
+        Reference::build_with(scene, true)
+    }
+
+    /// The same, with alpha-tested casters solid when `alpha` is false: the answer geometric
+    /// techniques (shadow volumes) aim at, for telling which errors alpha testing alone causes.
+    pub fn build_with(scene: &Scene, alpha: bool) -> Reference {
         let mut occluders = Vec::new();
         let mut textures: Vec<Image> = Vec::new();
         let mut texture_slot: Vec<Option<usize>> = vec![None; scene.textures.len()];
@@ -102,8 +108,8 @@ impl Reference {
             if !(m.visible && m.casts_shadows) {
                 continue;
             }
-            let alpha = match (m.alpha_test, m.texture) {
-                (Some(f), Some(t)) if t < scene.textures.len() => {
+            let alpha_test = match (alpha, m.alpha_test, m.texture) {
+                (true, Some(f), Some(t)) if t < scene.textures.len() => {
                     let slot = *texture_slot[t].get_or_insert_with(|| {
                         textures.push(scene.textures[t].clone());
                         textures.len() - 1
@@ -123,7 +129,7 @@ impl Reference {
                 occluders.push(Occluder {
                     v,
                     uv: [0, 1, 2].map(|k| vert(k).uv),
-                    alpha,
+                    alpha: alpha_test,
                     node: 0,
                 });
             }

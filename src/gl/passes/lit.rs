@@ -17,14 +17,20 @@ pub struct ShadowBinding<'a> {
     pub texture: glow::Texture,
 }
 
+/// How the lit pass learns what is in shadow.
+pub enum LitShadow<'a> {
+    None,
+    Map(&'a ShadowBinding<'a>),
+    /// The stencil counts of this light's volumes; `test` = light only where the count is 0
+    /// (off for the fill-quad shading, which darkens afterwards).
+    Stencil {
+        test: bool,
+    },
+}
+
 /// Binds `program` with the light's uniforms and, with a shadow map, the texgen, the map and
 /// the fixed-function state of the technique.
-fn bind_light(
-    ctx: &PassContext,
-    program: &Program,
-    lp: &LightPlan,
-    shadow: Option<&ShadowBinding>,
-) {
+fn bind_light(ctx: &PassContext, program: &Program, lp: &LightPlan, shadow: &LitShadow) {
     let gl = ctx.gl;
     let light = &ctx.scene.lights[lp.light];
     program.bind(gl);
@@ -54,7 +60,11 @@ fn bind_light(
     let o = &ctx.options.shadow_map;
     // SAFETY: fixed-function state and a texture of our own on unit 1.
     unsafe {
-        match (offset_for(o, lp.order), o.offset_pass, shadow.is_some()) {
+        match (
+            offset_for(o, lp.order),
+            o.offset_pass,
+            matches!(shadow, LitShadow::Map(_)),
+        ) {
             // The paper's lit-pass offset pulls the lit world toward the camera.
             (Some((factor, units)), OffsetPass::Lit | OffsetPass::Both, true) => {
                 gl.enable(glow::POLYGON_OFFSET_FILL);
@@ -66,7 +76,7 @@ fn bind_light(
             gl.disable(glow::CLIP_DISTANCE0 + i);
         }
     }
-    let Some(s) = shadow else { return };
+    let LitShadow::Map(s) = shadow else { return };
     let camera_view = ctx.plan.camera.view;
     program.set_mat4(gl, "u_view", &camera_view);
     program.set_mat4(gl, "u_texgen", &s.view.texgen(&camera_view));
@@ -125,9 +135,20 @@ fn depth_state(gl: &glow::Context) {
     }
 }
 
+/// Draw only where the stencil compares to 0 with `func` (EQUAL: lit; NOTEQUAL: shadowed).
+fn stencil_gate(gl: &glow::Context, func: u32) {
+    // SAFETY: fixed-function state.
+    unsafe {
+        gl.enable(glow::STENCIL_TEST);
+        gl.stencil_func(func, 0, 0xff);
+        gl.stencil_op(glow::KEEP, glow::KEEP, glow::KEEP);
+    }
+}
+
 fn finish(gl: &glow::Context) {
     // SAFETY: state this pass enabled, switched off for the passes that do not set it.
     unsafe {
+        gl.disable(glow::STENCIL_TEST);
         gl.disable(glow::POLYGON_OFFSET_FILL);
         for i in 0..4 {
             gl.disable(glow::CLIP_DISTANCE0 + i);
@@ -136,9 +157,12 @@ fn finish(gl: &glow::Context) {
 }
 
 /// Adds the light's contribution where the depth equals the unlit pass's.
-pub fn draw(ctx: &PassContext, program: &Program, lp: &LightPlan, shadow: Option<&ShadowBinding>) {
+pub fn draw(ctx: &PassContext, program: &Program, lp: &LightPlan, shadow: &LitShadow) {
     let gl = ctx.gl;
     depth_state(gl);
+    if let LitShadow::Stencil { test: true } = shadow {
+        stencil_gate(gl, glow::EQUAL);
+    }
     // SAFETY: fixed-function state.
     unsafe {
         gl.color_mask(true, true, true, true);
@@ -150,13 +174,9 @@ pub fn draw(ctx: &PassContext, program: &Program, lp: &LightPlan, shadow: Option
     finish(gl);
 }
 
-/// Writes the light's decision into the bound mask target (cleared to "not a receiver").
-pub fn draw_mask(
-    ctx: &PassContext,
-    program: &Program,
-    lp: &LightPlan,
-    shadow: Option<&ShadowBinding>,
-) {
+/// Writes the light's decision into the bound mask target (cleared to "not a receiver"). Under
+/// shadow volumes the stencil decides: count 0 is lit, any other count shadowed.
+pub fn draw_mask(ctx: &PassContext, program: &Program, lp: &LightPlan, shadow: &LitShadow) {
     let gl = ctx.gl;
     depth_state(gl);
     // SAFETY: fixed-function state.
@@ -165,7 +185,16 @@ pub fn draw_mask(
         gl.disable(glow::BLEND);
     }
     bind_light(ctx, program, lp, shadow);
-    program.set_i32(gl, "u_mask_value", 0);
-    draw_items(ctx, program, &receivers(ctx), |_| {});
+    let items = receivers(ctx);
+    if let LitShadow::Stencil { .. } = shadow {
+        for (func, decision) in [(glow::EQUAL, 1), (glow::NOTEQUAL, 2)] {
+            stencil_gate(gl, func);
+            program.set_i32(gl, "u_mask_value", decision);
+            draw_items(ctx, program, &items, |_| {});
+        }
+    } else {
+        program.set_i32(gl, "u_mask_value", 0);
+        draw_items(ctx, program, &items, |_| {});
+    }
     finish(gl);
 }

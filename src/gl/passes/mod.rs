@@ -5,6 +5,7 @@ pub mod base;
 pub mod gbuffer;
 pub mod lit;
 pub mod shadow_map;
+pub mod stencil;
 
 use super::program::Program;
 use super::upload::{DrawItem, GpuScene};

@@ -1,0 +1,12 @@
+// Shadow volume geometry: homogeneous vertices, w = 0 at infinity (paper 4.1). gl_Position is the
+// same expression as world.vert's, and invariant, so front caps land exactly on their casters.
+layout(location = 0) in vec4 a_position;
+
+uniform mat4 u_model;     // the caster group's space -> world
+uniform mat4 u_view_proj; // world -> camera clip
+
+invariant gl_Position;
+
+void main() {
+    gl_Position = u_view_proj * (u_model * a_position);
+}

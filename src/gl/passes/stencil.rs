@@ -1,0 +1,148 @@
+//! One light's shadow volumes into the stencil buffer (paper 4.1 "Rendering Shadow Volumes").
+//!
+//! Depth-fail (the paper): back faces increment where the depth test fails, then front faces
+//! decrement where it fails; caps close the volumes. Depth-pass: front faces increment where the
+//! test passes, then back faces decrement; no caps. Two passes with culling (the paper's card), or
+//! one pass with glStencilOpSeparate. Colour and depth writes are off; the stencil is cleared
+//! first. Parts counted either way add up in the same buffer.
+
+use super::PassContext;
+use crate::gl::program::Program;
+use crate::gl::volumes::LightVolumes;
+use crate::options::{StencilPasses, StencilWrap, VolumeProjection};
+use crate::shadow::volume::Counting;
+use glow::HasContext;
+
+/// (increment, decrement) operations. One pass always wraps: front and back faces arrive
+/// interleaved, and a saturating DECR at 0 before its INCR would lose a count (the paper pairs
+/// two-sided stencil with EXT_stencil_wrap for this reason).
+fn ops(wrap: StencilWrap, passes: StencilPasses) -> (u32, u32) {
+    match (wrap, passes) {
+        (StencilWrap::Saturate, StencilPasses::TwoPass) => (glow::INCR, glow::DECR),
+        _ => (glow::INCR_WRAP, glow::DECR_WRAP),
+    }
+}
+
+/// glStencilOp arguments (sfail, dpfail, dppass) for a face that increments or decrements.
+fn face_op(counting: Counting, op: u32) -> (u32, u32, u32) {
+    match counting {
+        Counting::ZFail => (glow::KEEP, op, glow::KEEP),
+        Counting::ZPass => (glow::KEEP, glow::KEEP, op),
+    }
+}
+
+fn draw_parts(gl: &glow::Context, program: &Program, v: &LightVolumes, counting: Counting) {
+    // SAFETY: the light's own vertex array; ranges lie inside its buffer.
+    unsafe {
+        gl.bind_vertex_array(Some(v.vao));
+        for p in v.parts.iter().filter(|p| p.part.counting == counting) {
+            program.set_mat4(gl, "u_model", &p.model);
+            let count = match counting {
+                Counting::ZPass => p.sides,
+                Counting::ZFail => p.sides + p.caps,
+            };
+            gl.draw_arrays(glow::TRIANGLES, p.first, count);
+        }
+        gl.bind_vertex_array(None);
+    }
+}
+
+/// Clears the stencil and counts the light's volumes into it.
+pub fn draw(ctx: &PassContext, program: &Program, volumes: &LightVolumes) {
+    let gl = ctx.gl;
+    let o = &ctx.options.shadow_volume;
+    // SAFETY: fixed-function state on the bound framebuffer.
+    unsafe {
+        gl.stencil_mask(0xff);
+        gl.clear_stencil(0);
+        gl.clear(glow::STENCIL_BUFFER_BIT);
+        gl.color_mask(false, false, false, false);
+        gl.depth_mask(false);
+        gl.enable(glow::DEPTH_TEST);
+        gl.depth_func(glow::LESS);
+        gl.disable(glow::BLEND);
+        gl.enable(glow::STENCIL_TEST);
+        gl.stencil_func(glow::ALWAYS, 0, 0xff);
+        if o.depth_offset {
+            // Doom 3: push the volumes a hair away so caps lose against their own surfaces.
+            gl.enable(glow::POLYGON_OFFSET_FILL);
+            gl.polygon_offset(0.0, 1.0);
+        } else {
+            gl.disable(glow::POLYGON_OFFSET_FILL);
+        }
+        if o.projection == VolumeProjection::DepthClamp {
+            gl.enable(glow::DEPTH_CLAMP);
+        }
+    }
+    program.bind(gl);
+    program.set_mat4(gl, "u_view_proj", &ctx.plan.camera.view_proj);
+    let (incr, decr) = ops(o.wrap, o.stencil);
+    for counting in [Counting::ZFail, Counting::ZPass] {
+        if !volumes.parts.iter().any(|p| p.part.counting == counting) {
+            continue;
+        }
+        // Which face increments: back faces under depth-fail, front faces under depth-pass.
+        let (incr_face, decr_face) = match counting {
+            Counting::ZFail => (glow::BACK, glow::FRONT),
+            Counting::ZPass => (glow::FRONT, glow::BACK),
+        };
+        // SAFETY: fixed-function state; draws our own buffers.
+        unsafe {
+            match o.stencil {
+                StencilPasses::TwoPass => {
+                    gl.enable(glow::CULL_FACE);
+                    for (face, op) in [(incr_face, incr), (decr_face, decr)] {
+                        // Draw only `face`: cull the other one.
+                        gl.cull_face(if face == glow::BACK {
+                            glow::FRONT
+                        } else {
+                            glow::BACK
+                        });
+                        let (sfail, dpfail, dppass) = face_op(counting, op);
+                        gl.stencil_op(sfail, dpfail, dppass);
+                        draw_parts(gl, program, volumes, counting);
+                    }
+                }
+                StencilPasses::Separate => {
+                    gl.disable(glow::CULL_FACE);
+                    for (face, op) in [(incr_face, incr), (decr_face, decr)] {
+                        let (sfail, dpfail, dppass) = face_op(counting, op);
+                        gl.stencil_op_separate(face, sfail, dpfail, dppass);
+                    }
+                    draw_parts(gl, program, volumes, counting);
+                }
+            }
+        }
+    }
+    // SAFETY: state reset for the lit pass, which sets what it needs.
+    unsafe {
+        gl.stencil_op(glow::KEEP, glow::KEEP, glow::KEEP);
+        gl.disable(glow::POLYGON_OFFSET_FILL);
+        gl.disable(glow::DEPTH_CLAMP);
+        gl.color_mask(true, true, true, true);
+    }
+}
+
+/// Bestimt and Freitag's fill: where the stencil is not zero, scale the frame by `shade` and zero
+/// the stencil (one full-screen triangle).
+pub fn fill(gl: &glow::Context, program: &Program, vao: glow::VertexArray, shade: f32) {
+    // SAFETY: fixed-function state; a full-screen triangle from gl_VertexID.
+    unsafe {
+        gl.disable(glow::DEPTH_TEST);
+        gl.disable(glow::CULL_FACE);
+        gl.enable(glow::STENCIL_TEST);
+        gl.stencil_func(glow::NOTEQUAL, 0, 0xff);
+        gl.stencil_op(glow::KEEP, glow::KEEP, glow::ZERO);
+        gl.enable(glow::BLEND);
+        gl.blend_func(glow::DST_COLOR, glow::ZERO);
+        gl.color_mask(true, true, true, true);
+        program.bind(gl);
+        program.set_f32(gl, "u_shade", shade);
+        gl.bind_vertex_array(Some(vao));
+        gl.draw_arrays(glow::TRIANGLES, 0, 3);
+        gl.bind_vertex_array(None);
+        gl.stencil_op(glow::KEEP, glow::KEEP, glow::KEEP);
+        gl.disable(glow::BLEND);
+        gl.enable(glow::DEPTH_TEST);
+    }
+}

@@ -1,0 +1,502 @@
+//! Stenciled shadow volumes on the CPU (paper section 4; thesis chapter 3), GL-free.
+//!
+//! Casters are grouped by owner (the world; each model, in its own model space so its caps reuse
+//! the exact vertex arithmetic of its lit pass) and split into connected components, which are the
+//! unit of the depth-pass / depth-fail choice. Per light:
+//! 1. triangles are classified as facing the light (`n·(L - c) > -ε |L - c|`, Forsyth's ε);
+//! 2. edges are extruded by a rule: the paper's world rule (skip an edge only when it is shared by
+//!    exactly two facing triangles; otherwise every facing triangle on it extrudes it), extrude
+//!    every edge of every facing triangle (the paper's first fix), or the naive 2-manifold rule;
+//! 3. side quads run from the edge to infinity, P' = (P.xyz·L.w − L.xyz·P.w, 0) (or a finite
+//!    distance); depth-fail adds the facing triangles as the front cap and their flipped
+//!    extrusions as the back cap.
+
+use super::edges::Connectivity;
+pub use crate::options::{EdgeRule, Extrusion};
+use crate::scene::{Aabb, Scene, SurfaceOwner};
+use glam::{DVec3, Mat4, Vec3};
+use serde::Serialize;
+
+/// Whether a component's volume is counted in front of (depth-pass) or behind (depth-fail) the
+/// visible surface.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Counting {
+    ZPass,
+    ZFail,
+}
+
+/// A connected set of caster triangles.
+#[derive(Debug, Clone)]
+pub struct Component {
+    /// Triangles of the group's connectivity.
+    pub triangles: Vec<u32>,
+    /// Edges of the group's connectivity whose triangles belong to this component.
+    pub edges: Vec<u32>,
+    /// Bounds in the group's space.
+    pub bounds: Aabb,
+}
+
+/// The casters of one owner, welded, with their connectivity and components.
+#[derive(Debug, Clone)]
+pub struct CasterGroup {
+    pub owner: SurfaceOwner,
+    pub connectivity: Connectivity,
+    pub components: Vec<Component>,
+}
+
+/// Every caster group of a scene, built once per scene.
+#[derive(Debug, Clone, Default)]
+pub struct CasterGroups {
+    pub groups: Vec<CasterGroup>,
+}
+
+fn find(parent: &mut [u32], mut x: u32) -> u32 {
+    while parent[x as usize] != x {
+        parent[x as usize] = parent[parent[x as usize] as usize];
+        x = parent[x as usize];
+    }
+    x
+}
+
+impl CasterGroup {
+    /// Welds and connects `triangles` (in the owner's space), then splits them into components.
+    pub fn build(owner: SurfaceOwner, triangles: Vec<[Vec3; 3]>) -> CasterGroup {
+        let connectivity = Connectivity::build(triangles);
+        let n = connectivity.triangles.len();
+        let mut parent: Vec<u32> = (0..n as u32).collect();
+        for e in &connectivity.edges {
+            let tris = connectivity.triangles_of(e);
+            for w in tris.windows(2) {
+                let (a, b) = (find(&mut parent, w[0]), find(&mut parent, w[1]));
+                if a != b {
+                    parent[a as usize] = b;
+                }
+            }
+        }
+        let mut index_of_root = std::collections::HashMap::new();
+        let mut components: Vec<Component> = Vec::new();
+        let mut tri_component = vec![0u32; n];
+        for t in 0..n as u32 {
+            let root = find(&mut parent, t);
+            let c = *index_of_root.entry(root).or_insert_with(|| {
+                components.push(Component {
+                    triangles: Vec::new(),
+                    edges: Vec::new(),
+                    bounds: Aabb::EMPTY,
+                });
+                components.len() as u32 - 1
+            });
+            tri_component[t as usize] = c;
+            let comp = &mut components[c as usize];
+            comp.triangles.push(t);
+            for v in connectivity.triangles[t as usize] {
+                comp.bounds.extend(connectivity.positions[v as usize]);
+            }
+        }
+        // An edge's triangles are connected through it, so its first triangle's component is all
+        // of theirs.
+        for (ei, e) in connectivity.edges.iter().enumerate() {
+            let c = tri_component[connectivity.triangles_of(e)[0] as usize];
+            components[c as usize].edges.push(ei as u32);
+        }
+        CasterGroup {
+            owner,
+            connectivity,
+            components,
+        }
+    }
+}
+
+impl CasterGroups {
+    /// Groups the scene's casting triangles by owner, in each owner's own space.
+    pub fn build(scene: &Scene) -> CasterGroups {
+        let mut by_owner: Vec<(SurfaceOwner, Vec<[Vec3; 3]>)> = Vec::new();
+        for s in &scene.surfaces {
+            let m = &scene.materials[s.material];
+            if !(m.visible && m.casts_shadows) {
+                continue;
+            }
+            let slot = match by_owner.iter().position(|(o, _)| *o == s.owner) {
+                Some(i) => i,
+                None => {
+                    by_owner.push((s.owner, Vec::new()));
+                    by_owner.len() - 1
+                }
+            };
+            let range = s.first_index as usize..(s.first_index + s.index_count) as usize;
+            for t in scene.indices[range].chunks_exact(3) {
+                let p = |k: usize| scene.vertices[t[k] as usize].pos();
+                by_owner[slot].1.push([p(0), p(1), p(2)]);
+            }
+        }
+        CasterGroups {
+            groups: by_owner
+                .into_iter()
+                .map(|(owner, tris)| CasterGroup::build(owner, tris))
+                .collect(),
+        }
+    }
+}
+
+/// Doom 3's test of whether the view may be inside a caster's infinite shadow: the caster's bounds
+/// stretched by twice the near distance contain the eye or the light, or the segment from the
+/// light to the eye crosses them. When it may not, depth-pass is safe for that caster.
+pub fn potentially_inside_shadow(bounds: &Aabb, eye: Vec3, light: Vec3, near: f32) -> bool {
+    if bounds.is_empty() {
+        return false;
+    }
+    let stretch = 2.0 * near;
+    let (min, max) = (bounds.min - stretch, bounds.max + stretch);
+    let inside = |p: Vec3| p.cmpge(min).all() && p.cmple(max).all();
+    if inside(eye) || inside(light) {
+        return true;
+    }
+    // Slab test of the segment light → eye against the stretched box.
+    let d = eye - light;
+    let (mut t0, mut t1) = (0.0f32, 1.0f32);
+    for a in 0..3 {
+        if d[a].abs() < 1e-12 {
+            if light[a] < min[a] || light[a] > max[a] {
+                return false;
+            }
+        } else {
+            let (mut ta, mut tb) = ((min[a] - light[a]) / d[a], (max[a] - light[a]) / d[a]);
+            if ta > tb {
+                std::mem::swap(&mut ta, &mut tb);
+            }
+            t0 = t0.max(ta);
+            t1 = t1.min(tb);
+            if t0 > t1 {
+                return false;
+            }
+        }
+    }
+    true
+}
+
+/// How volumes are built.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct VolumeSettings {
+    pub rule: EdgeRule,
+    pub extrusion: Extrusion,
+    pub finite_distance: f32,
+    /// Forsyth's facing epsilon (cosine): a triangle faces the light when n·l > -ε.
+    pub facing_epsilon: f32,
+}
+
+/// Volume geometry of one component for one light, as triangles of homogeneous vertices.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct VolumeMesh {
+    /// Side quads (two triangles each), then front-cap triangles, then back-cap triangles.
+    pub vertices: Vec<[f32; 4]>,
+    pub side_vertices: usize,
+    pub cap_vertices: usize,
+    /// Edges extruded.
+    pub quads: usize,
+    /// Facing triangles (each gives a front and a back cap triangle under depth-fail).
+    pub facing: usize,
+}
+
+impl VolumeMesh {
+    /// Vertices drawn: sides only for depth-pass, sides and caps for depth-fail.
+    pub fn drawn(&self, counting: Counting) -> usize {
+        match counting {
+            Counting::ZPass => self.side_vertices,
+            Counting::ZFail => self.side_vertices + self.cap_vertices,
+        }
+    }
+}
+
+fn extrude(p: DVec3, light: DVec3, s: &VolumeSettings) -> [f64; 4] {
+    match s.extrusion {
+        // P' = (P.xyz L.w - L.xyz P.w, 0) with P.w = L.w = 1.
+        Extrusion::Infinite => {
+            let d = p - light;
+            [d.x, d.y, d.z, 0.0]
+        }
+        Extrusion::Finite => {
+            let d = (p - light).normalize_or_zero() * s.finite_distance as f64;
+            let q = p + d;
+            [q.x, q.y, q.z, 1.0]
+        }
+    }
+}
+
+fn to_f32(v: [f64; 4]) -> [f32; 4] {
+    v.map(|x| x as f32)
+}
+
+/// Builds the volume of `component` of `group` for a point light at `light` (in the group's
+/// space). `with_caps` adds the caps depth-fail needs.
+pub fn build_volume(
+    group: &CasterGroup,
+    component: usize,
+    light: DVec3,
+    s: &VolumeSettings,
+    with_caps: bool,
+) -> VolumeMesh {
+    let c = &group.connectivity;
+    let comp = &group.components[component];
+    let pos = |i: u32| c.positions[i as usize].as_dvec3();
+    // Facing triangles of the component (a triangle at the light itself cannot be extruded).
+    let mut facing = vec![false; c.triangles.len()];
+    let mut facing_list = Vec::new();
+    for &t in &comp.triangles {
+        let tri = c.triangles[t as usize];
+        let plane = &c.planes[t as usize];
+        if plane.normal == DVec3::ZERO || tri.iter().any(|&v| pos(v) == light) {
+            continue;
+        }
+        let centroid = (pos(tri[0]) + pos(tri[1]) + pos(tri[2])) / 3.0;
+        let to_light = light - centroid;
+        if plane.normal.dot(to_light) > -(s.facing_epsilon as f64) * to_light.length() {
+            facing[t as usize] = true;
+            facing_list.push(t);
+        }
+    }
+    let mut mesh = VolumeMesh {
+        facing: facing_list.len(),
+        ..VolumeMesh::default()
+    };
+    let quad = |a: u32, b: u32, out: &mut Vec<[f32; 4]>| {
+        // (b, a, a', b') faces out of the volume when (a, b) runs along the facing triangle's
+        // counter-clockwise winding.
+        let (pa, pb) = (pos(a), pos(b));
+        let (ea, eb) = (extrude(pa, light, s), extrude(pb, light, s));
+        let (va, vb) = ([pa.x, pa.y, pa.z, 1.0], [pb.x, pb.y, pb.z, 1.0]);
+        for v in [vb, va, ea, vb, ea, eb] {
+            out.push(to_f32(v));
+        }
+    };
+    // The edge's direction in triangle t's winding.
+    let oriented = |t: u32, v: [u32; 2]| -> (u32, u32) {
+        let tri = c.triangles[t as usize];
+        for k in 0..3 {
+            let (a, b) = (tri[k], tri[(k + 1) % 3]);
+            if (a, b) == (v[0], v[1]) || (a, b) == (v[1], v[0]) {
+                return (a, b);
+            }
+        }
+        (v[0], v[1])
+    };
+    for &ei in &comp.edges {
+        let e = &c.edges[ei as usize];
+        let tris = c.triangles_of(e);
+        match s.rule {
+            EdgeRule::Paper => {
+                let facing_here = tris.iter().filter(|&&t| facing[t as usize]).count();
+                if tris.len() == 2 && facing_here == 2 {
+                    continue;
+                }
+                for &t in tris.iter().filter(|&&t| facing[t as usize]) {
+                    let (a, b) = oriented(t, e.v);
+                    quad(a, b, &mut mesh.vertices);
+                    mesh.quads += 1;
+                }
+            }
+            EdgeRule::All => {
+                for &t in tris.iter().filter(|&&t| facing[t as usize]) {
+                    let (a, b) = oriented(t, e.v);
+                    quad(a, b, &mut mesh.vertices);
+                    mesh.quads += 1;
+                }
+            }
+            EdgeRule::Manifold => {
+                if tris.len() < 2 {
+                    continue;
+                }
+                let (f0, f1) = (facing[tris[0] as usize], facing[tris[1] as usize]);
+                if f0 != f1 {
+                    let t = if f0 { tris[0] } else { tris[1] };
+                    let (a, b) = oriented(t, e.v);
+                    quad(a, b, &mut mesh.vertices);
+                    mesh.quads += 1;
+                }
+            }
+        }
+    }
+    mesh.side_vertices = mesh.vertices.len();
+    if with_caps {
+        for &t in &facing_list {
+            let [a, b, c3] = c.triangles[t as usize].map(pos);
+            for p in [a, b, c3] {
+                mesh.vertices.push(to_f32([p.x, p.y, p.z, 1.0]));
+            }
+        }
+        for &t in &facing_list {
+            let [a, b, c3] = c.triangles[t as usize].map(pos);
+            // Flipped: the back cap faces away from the light, out of the volume.
+            for p in [c3, b, a] {
+                mesh.vertices.push(to_f32(extrude(p, light, s)));
+            }
+        }
+        mesh.cap_vertices = mesh.vertices.len() - mesh.side_vertices;
+    }
+    mesh
+}
+
+/// A group's transform to world space.
+pub fn group_transform(scene: &Scene, owner: SurfaceOwner) -> Mat4 {
+    match owner {
+        SurfaceOwner::World => Mat4::IDENTITY,
+        SurfaceOwner::Model(m) => scene.models[m].transform,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::scene::shapes::{MeshData, cuboid, sphere, torus};
+
+    fn tris(m: &MeshData) -> Vec<[Vec3; 3]> {
+        m.indices
+            .chunks_exact(3)
+            .map(|t| [0, 1, 2].map(|k| m.vertices[t[k] as usize].pos()))
+            .collect()
+    }
+
+    fn settings(rule: EdgeRule) -> VolumeSettings {
+        VolumeSettings {
+            rule,
+            extrusion: Extrusion::Infinite,
+            finite_distance: 1000.0,
+            facing_epsilon: 0.0,
+        }
+    }
+
+    /// Every vertex of the extruded edges has even degree: the silhouette is closed loops.
+    fn silhouette_is_closed(mesh: &VolumeMesh) -> bool {
+        let mut degree = std::collections::HashMap::new();
+        for q in mesh.vertices[..mesh.side_vertices].chunks_exact(6) {
+            // Quad (b, a, a', b', ...): its edge is a-b.
+            for v in [q[0], q[1]] {
+                *degree.entry(v.map(f32::to_bits)).or_insert(0) += 1;
+            }
+        }
+        degree.values().all(|d| d % 2 == 0)
+    }
+
+    #[test]
+    fn closed_meshes_give_closed_silhouettes_and_finite_geometry() {
+        let light = DVec3::new(3.0, 4.0, 12.0);
+        for m in [
+            cuboid(Vec3::new(-1.0, -1.0, 0.0), Vec3::new(1.0, 2.0, 3.0), 1.0),
+            sphere(Vec3::new(0.5, 0.0, 2.0), 2.0, 24, 12),
+            torus(Vec3::ZERO, 3.0, 1.0, 32, 16, 50.0),
+        ] {
+            let g = CasterGroup::build(SurfaceOwner::World, tris(&m));
+            assert_eq!(g.components.len(), 1);
+            let v = build_volume(&g, 0, light, &settings(EdgeRule::Paper), true);
+            assert!(v.quads > 0 && v.facing > 0);
+            assert!(silhouette_is_closed(&v), "open silhouette");
+            assert!(v.vertices.iter().all(|p| p.iter().all(|x| x.is_finite())));
+            assert_eq!(v.cap_vertices, 6 * v.facing);
+            // On a closed 2-manifold the paper's rule and the manifold rule agree.
+            let m2 = build_volume(&g, 0, light, &settings(EdgeRule::Manifold), true);
+            assert_eq!(m2.quads, v.quads);
+        }
+    }
+
+    #[test]
+    fn a_cube_under_a_light_above_has_a_four_edge_silhouette() {
+        let g = CasterGroup::build(
+            SurfaceOwner::World,
+            tris(&cuboid(Vec3::splat(-1.0), Vec3::splat(1.0), 1.0)),
+        );
+        let v = build_volume(
+            &g,
+            0,
+            DVec3::new(0.0, 0.0, 10.0),
+            &settings(EdgeRule::Paper),
+            false,
+        );
+        // Only the top face (2 triangles) faces the light; its 4 outer edges extrude.
+        assert_eq!((v.facing, v.quads), (2, 4));
+        assert_eq!(v.cap_vertices, 0);
+        let all = build_volume(
+            &g,
+            0,
+            DVec3::new(0.0, 0.0, 10.0),
+            &settings(EdgeRule::All),
+            false,
+        );
+        assert_eq!(all.quads, 6, "extrude-all adds the diagonal twice");
+    }
+
+    #[test]
+    fn open_and_non_manifold_edges_follow_each_rule() {
+        // A quad (two triangles) facing up, plus a third triangle on its diagonal (a fin).
+        let (a, b, c, d) = (Vec3::ZERO, Vec3::X, Vec3::new(1.0, 1.0, 0.0), Vec3::Y);
+        let fin = [a, c, Vec3::new(0.5, 0.5, 1.0)];
+        let g = CasterGroup::build(SurfaceOwner::World, vec![[a, b, c], [a, c, d], fin]);
+        let light = DVec3::new(0.3, 0.2, 10.0);
+        let paper = build_volume(&g, 0, light, &settings(EdgeRule::Paper), false);
+        let manifold = build_volume(&g, 0, light, &settings(EdgeRule::Manifold), false);
+        // Paper: the 4 open outer edges, the diagonal once per facing triangle on it (3 triangles
+        // there), and the fin's own open edges if it faces the light.
+        assert!(paper.quads >= 4 + 2);
+        // The naive rule never extrudes open edges: the outer boundary is missing.
+        assert!(
+            manifold.quads < 4,
+            "manifold rule extruded {}",
+            manifold.quads
+        );
+    }
+
+    #[test]
+    fn components_split_disconnected_casters_and_bound_them() {
+        let mut t = tris(&cuboid(Vec3::ZERO, Vec3::ONE, 1.0));
+        t.extend(tris(&cuboid(Vec3::splat(5.0), Vec3::splat(6.0), 1.0)));
+        let g = CasterGroup::build(SurfaceOwner::World, t);
+        assert_eq!(g.components.len(), 2);
+        assert_eq!(g.components[1].bounds.min, Vec3::splat(5.0));
+        let light = DVec3::new(3.0, 3.0, 20.0);
+        let v0 = build_volume(&g, 0, light, &settings(EdgeRule::Paper), true);
+        let v1 = build_volume(&g, 1, light, &settings(EdgeRule::Paper), true);
+        assert!(v0.quads >= 4 && v1.quads >= 4);
+    }
+
+    #[test]
+    fn the_near_plane_test_spots_views_inside_a_shadow() {
+        let caster = Aabb {
+            min: Vec3::new(-1.0, -1.0, 4.0),
+            max: Vec3::new(1.0, 1.0, 5.0),
+        };
+        let light = Vec3::new(0.0, 0.0, 10.0);
+        // Straight below the caster: inside its infinite shadow.
+        assert!(potentially_inside_shadow(&caster, Vec3::ZERO, light, 0.1));
+        // Off to the side: safe for depth-pass.
+        assert!(!potentially_inside_shadow(
+            &caster,
+            Vec3::new(20.0, 0.0, 0.0),
+            light,
+            0.1
+        ));
+        // Near the caster, within the near-plane stretch.
+        assert!(potentially_inside_shadow(
+            &caster,
+            Vec3::new(1.5, 0.0, 4.5),
+            light,
+            1.0
+        ));
+    }
+
+    #[test]
+    fn finite_extrusion_ends_at_its_distance() {
+        let g = CasterGroup::build(
+            SurfaceOwner::World,
+            tris(&cuboid(Vec3::splat(-1.0), Vec3::splat(1.0), 1.0)),
+        );
+        let mut s = settings(EdgeRule::Paper);
+        s.extrusion = Extrusion::Finite;
+        s.finite_distance = 50.0;
+        let light = DVec3::new(0.0, 0.0, 10.0);
+        let v = build_volume(&g, 0, light, &s, true);
+        for p in &v.vertices {
+            assert_eq!(p[3], 1.0);
+            let d = DVec3::new(p[0] as f64, p[1] as f64, p[2] as f64).distance(light);
+            assert!(d < 62.0, "{d}");
+        }
+    }
+}
