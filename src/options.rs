@@ -333,6 +333,10 @@ option_enum! {
         /// The textbook 2-manifold rule: an edge is a silhouette when exactly one of its first two
         /// triangles faces the light; open edges never are (it leaks on Quake 3 worlds).
         Manifold = "manifold",
+        /// Robust (not in the paper): facing triangles that run along an edge in opposite
+        /// directions cancel; each unmatched one extrudes it. Duplicated triangles and
+        /// non-manifold fans, where the paper's rule leaves volumes open, stay closed.
+        Signed = "signed",
     }
 }
 

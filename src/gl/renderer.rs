@@ -220,6 +220,11 @@ impl Renderer {
         &self.gl
     }
 
+    /// A shared handle to the context (for callers that outlive a borrow of the renderer).
+    pub fn gl_handle(&self) -> Arc<glow::Context> {
+        self.gl.clone()
+    }
+
     /// Depth textures currently allocated for shadow maps.
     pub fn shadow_map_textures(&self) -> usize {
         self.shadow_maps.texture_count()

@@ -28,6 +28,7 @@
 //! "shadow_map.size" = 1024
 //! ```
 
+use super::authored::ShapeSection;
 use super::{Camera, Light, LightKind, Scene, builtin};
 use crate::options::Options;
 use crate::q3::builder::SceneBuilder;
@@ -143,8 +144,14 @@ pub struct ModelSection {
 #[serde(deny_unknown_fields)]
 pub struct SceneFile {
     pub name: Option<String>,
-    /// The Quake 3 map; without one the scene is the built-in room.
+    /// The Quake 3 map; without one the scene is `base`.
     pub map: Option<MapSection>,
+    /// Without a map: the built-in room (default) or nothing, for scenes made of `[[shape]]`s.
+    #[serde(default)]
+    pub base: Base,
+    /// Geometry written in the file (see `scene/authored.rs`).
+    #[serde(default)]
+    pub shape: Vec<ShapeSection>,
     #[serde(default)]
     pub camera: CameraSection,
     #[serde(default)]
@@ -158,6 +165,15 @@ pub struct SceneFile {
     pub options: toml::Table,
     #[serde(skip)]
     pub path: PathBuf,
+}
+
+/// The scene a file without a map starts from.
+#[derive(Debug, Clone, Copy, Deserialize, Default, PartialEq, Eq)]
+#[serde(rename_all = "snake_case")]
+pub enum Base {
+    #[default]
+    Builtin,
+    Empty,
 }
 
 /// What loading found besides the scene.
@@ -271,7 +287,13 @@ impl SceneFile {
         let start = Instant::now();
         let mut report = LoadReport::default();
         let mut scene = match &self.map {
-            None => builtin::default_scene(),
+            None => match self.base {
+                Base::Builtin => builtin::default_scene(),
+                Base::Empty => Scene {
+                    name: "empty".to_string(),
+                    ..Scene::default()
+                },
+            },
             Some(map) => {
                 let vfs = self.vfs(map)?;
                 let shaders = load_shader_library(&vfs, &mut report.warnings);
@@ -371,6 +393,12 @@ impl SceneFile {
                 scene
             }
         };
+        for (i, shape) in self.shape.iter().enumerate() {
+            shape.add_to(i, &mut scene).map_err(|m| self.invalid(m))?;
+        }
+        if !self.shape.is_empty() {
+            scene.invalidate_casters();
+        }
         self.apply_camera(&mut scene.camera)?;
         for (i, l) in self.light.iter().enumerate() {
             let light = self.light(i, l)?;

@@ -4,6 +4,7 @@
 //! layer uploads it, the exact reference ray-casts it, the shadow-volume code builds edges from it.
 //! World space is Quake 3's: Z up, units of about an inch.
 
+pub mod authored;
 pub mod builtin;
 pub mod camera;
 pub mod file;

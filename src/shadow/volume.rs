@@ -227,6 +227,56 @@ fn to_f32(v: [f64; 4]) -> [f32; 4] {
     v.map(|x| x as f32)
 }
 
+/// Which triangles of `component` face a point light at `light` (indexed by the group's
+/// triangles; others are false): `n·(L − c) > −ε |L − c|` in f64, with the centroid `c`. A
+/// triangle with zero area, or with a corner at the light, never faces it.
+pub fn facing_flags(
+    group: &CasterGroup,
+    component: usize,
+    light: DVec3,
+    epsilon: f32,
+) -> Vec<bool> {
+    let c = &group.connectivity;
+    let pos = |i: u32| c.positions[i as usize].as_dvec3();
+    let mut facing = vec![false; c.triangles.len()];
+    for &t in &group.components[component].triangles {
+        let tri = c.triangles[t as usize];
+        let plane = &c.planes[t as usize];
+        if plane.normal == DVec3::ZERO || tri.iter().any(|&v| pos(v) == light) {
+            continue;
+        }
+        let centroid = (pos(tri[0]) + pos(tri[1]) + pos(tri[2])) / 3.0;
+        let to_light = light - centroid;
+        facing[t as usize] = plane.normal.dot(to_light) > -(epsilon as f64) * to_light.length();
+    }
+    facing
+}
+
+/// The same classification computed in f32 throughout, to find where single precision decides
+/// differently (lights on or near a triangle's plane, far from the origin).
+pub fn facing_flags_f32(
+    group: &CasterGroup,
+    component: usize,
+    light: Vec3,
+    epsilon: f32,
+) -> Vec<bool> {
+    let c = &group.connectivity;
+    let pos = |i: u32| c.positions[i as usize];
+    let mut facing = vec![false; c.triangles.len()];
+    for &t in &group.components[component].triangles {
+        let tri = c.triangles[t as usize];
+        let n = (pos(tri[1]) - pos(tri[0])).cross(pos(tri[2]) - pos(tri[0]));
+        if n == Vec3::ZERO || tri.iter().any(|&v| pos(v) == light) {
+            continue;
+        }
+        let n = n.normalize();
+        let centroid = (pos(tri[0]) + pos(tri[1]) + pos(tri[2])) / 3.0;
+        let to_light = light - centroid;
+        facing[t as usize] = n.dot(to_light) > -epsilon * to_light.length();
+    }
+    facing
+}
+
 /// Builds the volume of `component` of `group` for a point light at `light` (in the group's
 /// space). `with_caps` adds the caps depth-fail needs.
 pub fn build_volume(
@@ -239,22 +289,13 @@ pub fn build_volume(
     let c = &group.connectivity;
     let comp = &group.components[component];
     let pos = |i: u32| c.positions[i as usize].as_dvec3();
-    // Facing triangles of the component (a triangle at the light itself cannot be extruded).
-    let mut facing = vec![false; c.triangles.len()];
-    let mut facing_list = Vec::new();
-    for &t in &comp.triangles {
-        let tri = c.triangles[t as usize];
-        let plane = &c.planes[t as usize];
-        if plane.normal == DVec3::ZERO || tri.iter().any(|&v| pos(v) == light) {
-            continue;
-        }
-        let centroid = (pos(tri[0]) + pos(tri[1]) + pos(tri[2])) / 3.0;
-        let to_light = light - centroid;
-        if plane.normal.dot(to_light) > -(s.facing_epsilon as f64) * to_light.length() {
-            facing[t as usize] = true;
-            facing_list.push(t);
-        }
-    }
+    let facing = facing_flags(group, component, light, s.facing_epsilon);
+    let facing_list: Vec<u32> = comp
+        .triangles
+        .iter()
+        .copied()
+        .filter(|&t| facing[t as usize])
+        .collect();
     let mut mesh = VolumeMesh {
         facing: facing_list.len(),
         ..VolumeMesh::default()
@@ -298,6 +339,29 @@ pub fn build_volume(
             EdgeRule::All => {
                 for &t in tris.iter().filter(|&&t| facing[t as usize]) {
                     let (a, b) = oriented(t, e.v);
+                    quad(a, b, &mut mesh.vertices);
+                    mesh.quads += 1;
+                }
+            }
+            EdgeRule::Signed => {
+                // +1 for each facing triangle running v[0] -> v[1], -1 for v[1] -> v[0].
+                let net: i32 = tris
+                    .iter()
+                    .filter(|&&t| facing[t as usize])
+                    .map(|&t| {
+                        if oriented(t, e.v) == (e.v[0], e.v[1]) {
+                            1
+                        } else {
+                            -1
+                        }
+                    })
+                    .sum();
+                let (a, b) = if net > 0 {
+                    (e.v[0], e.v[1])
+                } else {
+                    (e.v[1], e.v[0])
+                };
+                for _ in 0..net.unsigned_abs() {
                     quad(a, b, &mut mesh.vertices);
                     mesh.quads += 1;
                 }

@@ -70,9 +70,12 @@ pub fn openarena_data() -> std::path::PathBuf {
 /// Loads a scene file from `assets/scenes/` with default options (no progress bar).
 pub fn load_scene_file(name: &str) -> (Scene, shadowlab::scene::file::LoadReport, Options) {
     openarena_data();
-    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("assets/scenes")
-        .join(format!("{name}.toml"));
+    load_asset(&format!("assets/scenes/{name}.toml"))
+}
+
+/// Loads a scene file by its path under the repository.
+pub fn load_asset(relative: &str) -> (Scene, shadowlab::scene::file::LoadReport, Options) {
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join(relative);
     let file = shadowlab::scene::file::SceneFile::read(&path).unwrap_or_else(|e| panic!("{e}"));
     let mut options = Options::default();
     options.apply_toml(&file.options).unwrap();
@@ -167,6 +170,12 @@ impl Measurer {
     pub fn renderer(&mut self) -> &mut shadowlab::gl::Renderer {
         let _ = &self.ctx;
         &mut self.renderer
+    }
+
+    /// Moves the camera (the exact masks follow it).
+    pub fn set_camera(&mut self, camera: shadowlab::scene::Camera) {
+        self.scene.camera = camera;
+        self.exact.clear();
     }
 
     /// The exact mask of light `l` for frames of this size.
