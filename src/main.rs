@@ -27,6 +27,8 @@ enum Command {
     Inspect(commands::inspect::Args),
     /// Measure frame time and error against the exact reference over a sweep of options.
     Bench(commands::bench::Args),
+    /// Regenerate the paper's figures and claims beside our measurements (index.html + .md).
+    Reproduce(commands::reproduce::Args),
 }
 
 fn main() {
@@ -40,6 +42,7 @@ fn main() {
         Command::Options(a) => commands::options::run(&a),
         Command::Inspect(a) => commands::inspect::run(&cli.common, &a),
         Command::Bench(a) => commands::bench::run(&cli.common, &a),
+        Command::Reproduce(a) => commands::reproduce::run(&cli.common, &a),
     };
     if let Err(e) = result {
         eprintln!("error: {e:#}");

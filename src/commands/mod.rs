@@ -5,6 +5,7 @@ pub mod info;
 pub mod inspect;
 pub mod options;
 pub mod render;
+pub mod reproduce;
 
 use anyhow::{Context, Result};
 use shadowlab::gl::{GlContext, Renderer, create_context};
@@ -95,7 +96,8 @@ pub fn load(common: &CommonArgs, path: Option<&std::path::Path>) -> Result<Loade
         Some(p) => {
             let file = SceneFile::read(p)?;
             let options = scene_options(common, &file.options)?;
-            let (scene, report) = file.build(&options)?;
+            let (scene, mut report) = file.build(&options)?;
+            report.warnings.extend(enclosed_light_warnings(&scene));
             Ok(Loaded {
                 scene,
                 options,
@@ -103,6 +105,19 @@ pub fn load(common: &CommonArgs, path: Option<&std::path::Path>) -> Result<Loade
             })
         }
     }
+}
+
+/// Warns about lights that sit inside or behind geometry (see `truth::enclosure`).
+pub fn enclosed_light_warnings(scene: &Scene) -> Vec<String> {
+    if scene.lights.is_empty() {
+        return Vec::new();
+    }
+    let reference = shadowlab::truth::Reference::build(scene);
+    let warnings = shadowlab::truth::enclosure::warnings(scene, &reference);
+    for w in &warnings {
+        log::warn!("{w}");
+    }
+    warnings
 }
 
 /// A context on the chosen path and a renderer on it.

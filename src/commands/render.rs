@@ -2,10 +2,11 @@
 
 use super::{CommonArgs, load, start_gl};
 use anyhow::{Context, Result};
+use glam::Vec3;
 use shadowlab::frame::Frame;
 use shadowlab::gl::FrameRequest;
 use shadowlab::scene::Scene;
-use shadowlab::truth::{self, Counts, Reference, Tracing};
+use shadowlab::truth::{self, Counts, Reference, Tracing, reference};
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
@@ -82,6 +83,79 @@ pub struct Args {
     /// (light<i>.mask.png, light<i>.reference.png, light<i>.error.png) and print the errors.
     #[arg(long, value_name = "DIR")]
     mask: Option<PathBuf>,
+    /// Explain one pixel (repeatable): its surface, and per light what the technique and the
+    /// exact reference say and which triangle blocks the shadow ray.
+    #[arg(long, value_name = "X,Y")]
+    probe: Vec<String>,
+}
+
+fn parse_probe(s: &str) -> Result<(u32, u32)> {
+    let (x, y) = s
+        .split_once(',')
+        .with_context(|| format!("--probe `{s}` is not X,Y"))?;
+    Ok((x.trim().parse()?, y.trim().parse()?))
+}
+
+/// Prints what decides pixel (x, y)'s shadows, light by light.
+fn probe(scene: &Scene, frame: &Frame, (x, y): (u32, u32)) -> Result<()> {
+    let g = frame
+        .gbuffer
+        .as_ref()
+        .context("the frame has no G-buffer")?;
+    if x >= g.width || y >= g.height {
+        anyhow::bail!(
+            "--probe {x},{y} is outside the {}x{} frame",
+            g.width,
+            g.height
+        );
+    }
+    let i = (y * g.width + x) as usize;
+    let (p, n) = (
+        Vec3::from_array(g.position[i]),
+        Vec3::from_array(g.normal[i]),
+    );
+    println!(
+        "pixel {x},{y}: position {p:?}, normal {n:?}, G-buffer kind {}",
+        g.kind[i]
+    );
+    let reference = Reference::build(scene);
+    for mask in &frame.masks {
+        let light = &scene.lights[mask.light];
+        let from = reference::shadow_ray_origin(p, n);
+        let blockers = reference.blockers(from, light.position.as_dvec3());
+        let what = if blockers.is_empty() {
+            "nothing blocks the ray".to_string()
+        } else {
+            let list: Vec<String> = blockers
+                .iter()
+                .take(6)
+                .map(|b| {
+                    let m = &scene.materials[scene.surfaces[b.surface].material];
+                    format!(
+                        "\n    at {:.2}: surface {} (`{}`, cull {:?}), {} the light, triangle {:?}",
+                        b.distance,
+                        b.surface,
+                        m.name,
+                        m.cull,
+                        if b.faces_light { "facing" } else { "back to" },
+                        b.triangle.map(|v| v.to_array().map(|c| c as f32))
+                    )
+                })
+                .collect();
+            format!(
+                "{} triangles block the ray:{}",
+                blockers.len(),
+                list.concat()
+            )
+        };
+        println!(
+            "  light{} ({}): technique {:?}, {what}",
+            mask.light,
+            light.name,
+            mask.get(x, y)
+        );
+    }
+    Ok(())
 }
 
 pub fn run(common: &CommonArgs, args: &Args) -> Result<()> {
@@ -92,8 +166,13 @@ pub fn run(common: &CommonArgs, args: &Args) -> Result<()> {
     } = load(common, args.scene.as_deref())?;
     let (mut ctx, mut renderer) = start_gl(&options)?;
     renderer.load_scene(&scene)?;
+    let probes: Vec<(u32, u32)> = args
+        .probe
+        .iter()
+        .map(|s| parse_probe(s))
+        .collect::<Result<_>>()?;
     let request = FrameRequest {
-        masks: args.mask.is_some(),
+        masks: args.mask.is_some() || !probes.is_empty(),
     };
     let frame = renderer.render_with(&scene, &options, request)?;
     if let Some(window) = ctx.window() {
@@ -107,6 +186,9 @@ pub fn run(common: &CommonArgs, args: &Args) -> Result<()> {
         .with_context(|| format!("cannot write {}", args.out.display()))?;
     if let Some(dir) = &args.mask {
         write_masks(&scene, &frame, dir)?;
+    }
+    for &p in &probes {
+        probe(&scene, &frame, p)?;
     }
     // Per-light passes are summed so that 64 lights still give one readable line.
     let mut totals: Vec<(String, f64, usize)> = Vec::new();

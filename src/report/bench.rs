@@ -30,13 +30,27 @@ pub struct BenchSettings {
 /// One point of a sweep.
 #[derive(Debug, Clone)]
 pub struct BenchConfig {
+    /// A name for the configuration; the swept values when absent.
+    pub name: Option<String>,
     /// The swept keys and their values, e.g. `shadow_map.size=512`.
     pub swept: BTreeMap<String, String>,
     pub options: Options,
 }
 
 impl BenchConfig {
+    /// A configuration known by name rather than by swept values.
+    pub fn named(name: &str, options: Options) -> BenchConfig {
+        BenchConfig {
+            name: Some(name.to_string()),
+            swept: BTreeMap::new(),
+            options,
+        }
+    }
+
     pub fn label(&self) -> String {
+        if let Some(n) = &self.name {
+            return n.clone();
+        }
         if self.swept.is_empty() {
             return format!("technique={}", self.options.technique);
         }
@@ -54,6 +68,7 @@ pub fn sweep_configs(
     sweeps: &[(String, Vec<String>)],
 ) -> Result<Vec<BenchConfig>, OptionError> {
     let mut configs = vec![BenchConfig {
+        name: None,
         swept: BTreeMap::new(),
         options: base.clone(),
     }];
@@ -65,7 +80,11 @@ pub fn sweep_configs(
                 o.set(key, v)?;
                 let mut swept = c.swept.clone();
                 swept.insert(key.clone(), o.get(key)?);
-                next.push(BenchConfig { swept, options: o });
+                next.push(BenchConfig {
+                    name: None,
+                    swept,
+                    options: o,
+                });
             }
         }
         configs = next;
@@ -180,6 +199,16 @@ struct FrameError {
     volumes: Vec<VolumeStats>,
 }
 
+/// The path's first frame of one configuration, with its masks, the exact masks and the error.
+#[derive(Debug, Clone)]
+pub struct Capture {
+    pub frame: Frame,
+    /// The exact mask of each of `frame.masks`, in the same order.
+    pub exact: Vec<Mask>,
+    pub total: Counts,
+    pub per_light: Vec<(usize, Counts)>,
+}
+
 struct Measured {
     frame_ms: Vec<f64>,
     passes: BTreeMap<String, Vec<f64>>,
@@ -239,10 +268,20 @@ impl<'a> Bench<'a> {
         Ok(m)
     }
 
+    /// `options` with shadows off. The techniques' own groups are reset too: they do nothing
+    /// without shadows, so a sweep over them shares one baseline.
+    fn shadows_off(options: &Options) -> Options {
+        let defaults = Options::default();
+        Options {
+            technique: Technique::None,
+            shadow_map: defaults.shadow_map,
+            shadow_volume: defaults.shadow_volume,
+            ..options.clone()
+        }
+    }
+
     fn baseline_key(options: &Options) -> String {
-        let mut off = options.clone();
-        off.technique = Technique::None;
-        serde_json::to_string(&off).unwrap_or_default()
+        serde_json::to_string(&Self::shadows_off(options)).unwrap_or_default()
     }
 
     /// Median frame time of `options` with shadows off, measured once per distinct options.
@@ -251,15 +290,14 @@ impl<'a> Bench<'a> {
         if let Some(&ms) = self.baselines.get(&key) {
             return Ok(ms);
         }
-        let mut off = options.clone();
-        off.technique = Technique::None;
+        let off = Self::shadows_off(options);
         let ms = median(&mut self.measure(&off)?.frame_ms);
         self.baselines.insert(key, ms);
         Ok(ms)
     }
 
-    /// Error of `options` on the first frame of the path, with that frame's volume stats.
-    fn error(&mut self, options: &Options) -> Result<FrameError, RenderError> {
+    /// The first frame of the path with `options`, compared with the exact reference.
+    pub fn capture(&mut self, options: &Options) -> Result<Capture, RenderError> {
         let camera = self.settings.path[0].apply(&self.scene.camera);
         let frame =
             self.renderer
@@ -273,6 +311,7 @@ impl<'a> Bench<'a> {
             .get_or_insert_with(|| Reference::build(self.scene));
         let mut total = Counts::default();
         let mut per_light = Vec::new();
+        let mut exact_masks = Vec::new();
         for mask in &frame.masks {
             let key = (frame.width, frame.height, mask.light);
             let exact = self.reference_masks.entry(key).or_insert_with(|| {
@@ -287,15 +326,27 @@ impl<'a> Bench<'a> {
             let c = truth::compare(mask, exact);
             total.add(&c);
             per_light.push((mask.light, c));
+            exact_masks.push(exact.clone());
         }
-        Ok(FrameError {
+        Ok(Capture {
+            frame,
+            exact: exact_masks,
             total,
             per_light,
-            volumes: frame.volumes.clone(),
         })
     }
 
-    /// Measures every configuration.
+    /// Error of `options` on the first frame of the path, with that frame's volume stats.
+    fn error(&mut self, options: &Options) -> Result<FrameError, RenderError> {
+        let c = self.capture(options)?;
+        Ok(FrameError {
+            total: c.total,
+            per_light: c.per_light,
+            volumes: c.frame.volumes,
+        })
+    }
+
+    /// Measures every configuration, with a progress bar when the settings ask for one.
     pub fn run(&mut self, configs: &[BenchConfig]) -> Result<Vec<BenchRow>, RenderError> {
         let bar = if self.settings.progress {
             let b = ProgressBar::new(configs.len() as u64);
@@ -307,6 +358,17 @@ impl<'a> Bench<'a> {
         } else {
             ProgressBar::hidden()
         };
+        let rows = self.run_with(configs, &bar)?;
+        bar.finish_and_clear();
+        Ok(rows)
+    }
+
+    /// Measures every configuration, advancing the caller's bar by one per configuration.
+    pub fn run_with(
+        &mut self,
+        configs: &[BenchConfig],
+        bar: &ProgressBar,
+    ) -> Result<Vec<BenchRow>, RenderError> {
         let mut rows = Vec::with_capacity(configs.len());
         for c in configs {
             bar.set_message(c.label());
@@ -358,7 +420,6 @@ impl<'a> Bench<'a> {
             });
             bar.inc(1);
         }
-        bar.finish_and_clear();
         Ok(rows)
     }
 }

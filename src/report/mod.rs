@@ -1,5 +1,7 @@
 //! Reports: benchmark runs, their tables and figures.
 
 pub mod bench;
+pub mod images;
 pub mod plot;
+pub mod reproduce;
 pub mod table;

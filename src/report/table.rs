@@ -1,6 +1,102 @@
-//! Markdown tables of bench rows.
+//! Tables: built once, written as Markdown or HTML.
 
 use super::bench::BenchRow;
+
+/// How a column's cells line up.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Align {
+    Left,
+    Right,
+}
+
+/// A table of text cells with a header row.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct Table {
+    pub header: Vec<(String, Align)>,
+    pub rows: Vec<Vec<String>>,
+    /// A line under the table (units, clocks).
+    pub note: Option<String>,
+}
+
+impl Table {
+    pub fn new(header: &[(&str, Align)]) -> Table {
+        Table {
+            header: header.iter().map(|(h, a)| (h.to_string(), *a)).collect(),
+            ..Table::default()
+        }
+    }
+
+    pub fn push(&mut self, row: Vec<String>) {
+        self.rows.push(row);
+    }
+
+    pub fn to_markdown(&self) -> String {
+        let cell = |s: &str| s.replace('|', "\\|");
+        let mut s = String::from("|");
+        for (h, _) in &self.header {
+            s.push_str(&format!(" {} |", cell(h)));
+        }
+        s.push_str("\n|");
+        for (_, a) in &self.header {
+            s.push_str(match a {
+                Align::Left => "---|",
+                Align::Right => "---:|",
+            });
+        }
+        s.push('\n');
+        for r in &self.rows {
+            s.push('|');
+            for c in r {
+                s.push_str(&format!(" {} |", cell(c)));
+            }
+            s.push('\n');
+        }
+        if let Some(n) = &self.note {
+            s.push_str(&format!("\n{n}\n"));
+        }
+        s
+    }
+
+    pub fn to_html(&self) -> String {
+        let align = |a: Align| match a {
+            Align::Left => "left",
+            Align::Right => "right",
+        };
+        let mut s = String::from("<table>\n<tr>");
+        for (h, a) in &self.header {
+            s.push_str(&format!(
+                "<th style=\"text-align:{}\">{}</th>",
+                align(*a),
+                escape_html(h)
+            ));
+        }
+        s.push_str("</tr>\n");
+        for r in &self.rows {
+            s.push_str("<tr>");
+            for (i, c) in r.iter().enumerate() {
+                let a = self.header.get(i).map_or(Align::Left, |h| h.1);
+                s.push_str(&format!(
+                    "<td style=\"text-align:{}\">{}</td>",
+                    align(a),
+                    escape_html(c)
+                ));
+            }
+            s.push_str("</tr>\n");
+        }
+        s.push_str("</table>\n");
+        if let Some(n) = &self.note {
+            s.push_str(&format!("<p class=\"note\">{}</p>\n", escape_html(n)));
+        }
+        s
+    }
+}
+
+pub fn escape_html(s: &str) -> String {
+    s.replace('&', "&amp;")
+        .replace('<', "&lt;")
+        .replace('>', "&gt;")
+        .replace('"', "&quot;")
+}
 
 /// The stages worth a column: every `lights.<stage>` sum, plus the base pass.
 fn stage_names(rows: &[BenchRow]) -> Vec<String> {
@@ -16,50 +112,75 @@ fn stage_names(rows: &[BenchRow]) -> Vec<String> {
 }
 
 /// One line per configuration: frame time, ratio to shadows off, error, and per-stage medians.
-pub fn markdown(rows: &[BenchRow]) -> String {
+pub fn bench_table(rows: &[BenchRow]) -> Table {
     let stages = stage_names(rows);
-    let mut s = String::from(
-        "| scene | configuration | lights | frame ms (median) | × shadows off | error % | error % excl. boundary |",
-    );
-    for st in &stages {
-        s.push_str(&format!(" {st} ms |"));
-    }
-    s.push_str("\n|---|---|---:|---:|---:|---:|---:|");
-    for _ in &stages {
-        s.push_str("---:|");
-    }
-    s.push('\n');
+    let mut header = vec![
+        ("scene".to_string(), Align::Left),
+        ("configuration".to_string(), Align::Left),
+        ("lights".to_string(), Align::Right),
+        ("frame ms (median)".to_string(), Align::Right),
+        ("× shadows off".to_string(), Align::Right),
+        ("error %".to_string(), Align::Right),
+        ("error % excl. boundary".to_string(), Align::Right),
+    ];
+    header.extend(stages.iter().map(|s| (format!("{s} ms"), Align::Right)));
+    let mut t = Table {
+        header,
+        ..Table::default()
+    };
     for r in rows {
-        s.push_str(&format!(
-            "| {} | {} | {} | {:.2} | {:.2} | {:.3} | {:.3} |",
-            r.scene,
-            r.label,
-            r.lights,
-            r.frame_ms.median,
-            r.ratio_to_shadows_off,
-            100.0 * r.error.total,
-            100.0 * r.error.total_excl_boundary
-        ));
-        for st in &stages {
-            match r.pass_ms.get(st) {
-                Some(ms) => s.push_str(&format!(" {ms:.2} |")),
-                None => s.push_str(" – |"),
-            }
-        }
-        s.push('\n');
+        let mut row = vec![
+            r.scene.clone(),
+            r.label.clone(),
+            r.lights.to_string(),
+            format!("{:.2}", r.frame_ms.median),
+            format!("{:.2}", r.ratio_to_shadows_off),
+            format!("{:.3}", 100.0 * r.error.total),
+            format!("{:.3}", 100.0 * r.error.total_excl_boundary),
+        ];
+        row.extend(stages.iter().map(|st| match r.pass_ms.get(st) {
+            Some(ms) => format!("{ms:.2}"),
+            None => "–".to_string(),
+        }));
+        t.push(row);
     }
-    if let Some(r) = rows.first() {
-        s.push_str(&format!(
-            "\n{}x{}, {} measured frames per configuration, pass times from the {} clock.\n",
+    t.note = rows.first().map(|r| {
+        format!(
+            "{}x{}, {} measured frames per configuration, pass times from the {} clock.",
             r.width,
             r.height,
             r.frames,
-            if r.clock == "gpu" {
-                "GPU (timer queries)"
-            } else {
-                "CPU (wall time around glFinish)"
-            }
-        ));
+            clock_name(&r.clock)
+        )
+    });
+    t
+}
+
+pub fn clock_name(clock: &str) -> &'static str {
+    if clock == "gpu" {
+        "GPU (timer queries)"
+    } else {
+        "CPU (wall time around glFinish)"
     }
-    s
+}
+
+/// [`bench_table`] as Markdown.
+pub fn markdown(rows: &[BenchRow]) -> String {
+    bench_table(rows).to_markdown()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn markdown_and_html_escape_and_align() {
+        let mut t = Table::new(&[("a|b", Align::Left), ("n", Align::Right)]);
+        t.push(vec!["<x>".into(), "1.5".into()]);
+        let md = t.to_markdown();
+        assert_eq!(md, "| a\\|b | n |\n|---|---:|\n| <x> | 1.5 |\n");
+        let html = t.to_html();
+        assert!(html.contains("<td style=\"text-align:left\">&lt;x&gt;</td>"));
+        assert!(html.contains("<th style=\"text-align:right\">n</th>"));
+    }
 }

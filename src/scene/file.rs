@@ -13,6 +13,7 @@
 //! [lights]
 //! from = "none"                   # or "entities" (the map's light entities) or "rtlights"
 //! # rtlights = "oa_dm3.rtlights"  # a DarkPlaces file, relative to this scene file
+//! # exclude = ["light0"]          # drop these lights of the map (by name)
 //! [[light]]
 //! kind = "spot"                   # or "omni"
 //! position = [0, 0, 100]
@@ -101,6 +102,9 @@ pub struct LightsSection {
     #[serde(default)]
     pub from: LightSource,
     pub rtlights: Option<PathBuf>,
+    /// Lights of the map (entities or rtlights) to leave out, by name.
+    #[serde(default)]
+    pub exclude: Vec<String>,
 }
 
 #[derive(Debug, Clone, Copy, Deserialize, PartialEq, Eq)]
@@ -325,6 +329,14 @@ impl SceneFile {
                             .collect()
                     }
                 };
+                for name in &self.lights.exclude {
+                    if !lights.iter().any(|l| &l.name == name) {
+                        return Err(self.invalid(format!(
+                            "[lights] exclude names `{name}`, which the map's lights do not have"
+                        )));
+                    }
+                }
+                lights.retain(|l| !self.lights.exclude.contains(&l.name));
                 builder.scene.lights.append(&mut lights);
                 for (i, m) in self.model.iter().enumerate() {
                     if !finite3(m.position) || !m.yaw.is_finite() {
@@ -406,6 +418,22 @@ impl SceneFile {
         }
         if let Some(n) = &self.name {
             scene.name = n.clone();
+        }
+        // A light inside a brush sees the backs of one-sided faces: the rasterized techniques
+        // ignore those, the exact reference does not, so every comparison would be off.
+        if let Some(world) = &scene.world {
+            for l in &scene.lights {
+                if world.cluster_at(l.position) < 0 {
+                    let w = format!(
+                        "light `{}` at {:?} is inside solid geometry (outside every BSP cluster): \
+                         its shadows will be wrong; move it into the playable space",
+                        l.name,
+                        l.position.to_array()
+                    );
+                    log::warn!("{w}");
+                    report.warnings.push(w);
+                }
+            }
         }
         scene.options = self.options.clone();
         report.load_ms = start.elapsed().as_secs_f64() * 1e3;

@@ -124,20 +124,61 @@ pub fn compare_where(rendered: &Mask, reference: &Mask, include: impl Fn(usize) 
     c
 }
 
+/// How one pixel compares, worst first (the order in which lights' answers are merged).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord)]
+enum PixelError {
+    FalseShadow,
+    FalseLit,
+    ReceiverMismatch,
+    Shadowed,
+    Lit,
+    NotReceiver,
+}
+
+impl PixelError {
+    fn of(rendered: u8, reference: u8) -> PixelError {
+        match (MaskValue::from_u8(rendered), MaskValue::from_u8(reference)) {
+            (MaskValue::NotReceiver, MaskValue::NotReceiver) => PixelError::NotReceiver,
+            (MaskValue::NotReceiver, _) | (_, MaskValue::NotReceiver) => {
+                PixelError::ReceiverMismatch
+            }
+            (MaskValue::Shadowed, MaskValue::Lit) => PixelError::FalseShadow,
+            (MaskValue::Lit, MaskValue::Shadowed) => PixelError::FalseLit,
+            (MaskValue::Lit, MaskValue::Lit) => PixelError::Lit,
+            (MaskValue::Shadowed, MaskValue::Shadowed) => PixelError::Shadowed,
+        }
+    }
+
+    fn colour(self) -> [u8; 4] {
+        match self {
+            PixelError::NotReceiver => [0, 0, 0, 255],
+            PixelError::ReceiverMismatch => [255, 220, 0, 255],
+            PixelError::FalseShadow => [255, 0, 0, 255],
+            PixelError::FalseLit => [0, 80, 255, 255],
+            PixelError::Lit => [150, 150, 150, 255],
+            PixelError::Shadowed => [60, 60, 60, 255],
+        }
+    }
+}
+
 /// RGBA image of one light's errors: red = false shadow, blue = false lit, grey = correct lit,
 /// dark grey = correct shadow, black = not a receiver, yellow = receiver mismatch.
 pub fn error_image(rendered: &Mask, reference: &Mask) -> Vec<u8> {
-    let mut out = Vec::with_capacity(reference.values.len() * 4);
-    for (&r, &t) in rendered.values.iter().zip(&reference.values) {
-        let px: [u8; 4] = match (MaskValue::from_u8(r), MaskValue::from_u8(t)) {
-            (MaskValue::NotReceiver, MaskValue::NotReceiver) => [0, 0, 0, 255],
-            (MaskValue::NotReceiver, _) | (_, MaskValue::NotReceiver) => [255, 220, 0, 255],
-            (MaskValue::Shadowed, MaskValue::Lit) => [255, 0, 0, 255],
-            (MaskValue::Lit, MaskValue::Shadowed) => [0, 80, 255, 255],
-            (MaskValue::Lit, MaskValue::Lit) => [150, 150, 150, 255],
-            (MaskValue::Shadowed, MaskValue::Shadowed) => [60, 60, 60, 255],
-        };
-        out.extend_from_slice(&px);
+    error_image_all(&[rendered], &[reference])
+}
+
+/// The same over several lights (pairs in order): each pixel shows its worst answer.
+pub fn error_image_all(rendered: &[&Mask], reference: &[&Mask]) -> Vec<u8> {
+    let n = reference.first().map_or(0, |m| m.values.len());
+    let mut out = Vec::with_capacity(n * 4);
+    for i in 0..n {
+        let worst = rendered
+            .iter()
+            .zip(reference)
+            .map(|(r, t)| PixelError::of(r.values[i], t.values[i]))
+            .min()
+            .unwrap_or(PixelError::NotReceiver);
+        out.extend_from_slice(&worst.colour());
     }
     out
 }

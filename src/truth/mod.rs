@@ -1,9 +1,10 @@
 //! The exact reference and the error measured against it (GL-free).
 
+pub mod enclosure;
 pub mod masks;
 pub mod metrics;
 pub mod reference;
 
 pub use masks::{Tracing, reference_mask};
-pub use metrics::{Counts, Rates, compare, compare_where, error_image};
-pub use reference::Reference;
+pub use metrics::{Counts, Rates, compare, compare_where, error_image, error_image_all};
+pub use reference::{Blocker, Reference};

@@ -37,7 +37,22 @@ struct Occluder {
     uv: [[f32; 2]; 3],
     /// Alpha test and texture index into `Reference::textures`.
     alpha: Option<(AlphaFunc, usize)>,
+    /// Index of the scene surface it came from.
+    surface: usize,
     node: usize,
+}
+
+/// The nearest triangle that blocks a shadow ray (for explaining one pixel's answer).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Blocker {
+    /// Index into `Scene::surfaces`.
+    pub surface: usize,
+    /// Distance from the ray's origin.
+    pub distance: f64,
+    /// The triangle's vertices, counter-clockwise seen from its front.
+    pub triangle: [DVec3; 3],
+    /// Whether its front faces the light (the end of the segment).
+    pub faces_light: bool,
 }
 
 impl Bounded<f64, 3> for Occluder {
@@ -103,7 +118,7 @@ impl Reference {
         let mut occluders = Vec::new();
         let mut textures: Vec<Image> = Vec::new();
         let mut texture_slot: Vec<Option<usize>> = vec![None; scene.textures.len()];
-        for s in &scene.surfaces {
+        for (surface, s) in scene.surfaces.iter().enumerate() {
             let m = &scene.materials[s.material];
             if !(m.visible && m.casts_shadows) {
                 continue;
@@ -130,6 +145,7 @@ impl Reference {
                     v,
                     uv: [0, 1, 2].map(|k| vert(k).uv),
                     alpha: alpha_test,
+                    surface,
                     node: 0,
                 });
             }
@@ -149,16 +165,20 @@ impl Reference {
     /// Whether occluder `o` blocks the segment: hit before `t_max`, and for alpha-tested
     /// surfaces, the texel at the hit point passes the test.
     fn blocks(&self, o: &Occluder, from: DVec3, dir: DVec3, t_max: f64) -> bool {
-        let Some((_, u, w)) = intersect(from, dir, t_max, &o.v) else {
-            return false;
-        };
+        self.block_distance(o, from, dir, t_max).is_some()
+    }
+
+    /// Where occluder `o` blocks the segment, if it does.
+    fn block_distance(&self, o: &Occluder, from: DVec3, dir: DVec3, t_max: f64) -> Option<f64> {
+        let (t, u, w) = intersect(from, dir, t_max, &o.v)?;
         let Some((func, tex)) = o.alpha else {
-            return true;
+            return Some(t);
         };
         let b = [(1.0 - u - w) as f32, u as f32, w as f32];
         let s = b[0] * o.uv[0][0] + b[1] * o.uv[1][0] + b[2] * o.uv[2][0];
-        let t = b[0] * o.uv[0][1] + b[1] * o.uv[1][1] + b[2] * o.uv[2][1];
-        func.passes(self.textures[tex].sample_nearest(s, t)[3])
+        let tt = b[0] * o.uv[0][1] + b[1] * o.uv[1][1] + b[2] * o.uv[2][1];
+        let texel = self.textures[tex].sample_nearest(s, tt)[3];
+        func.passes(texel).then_some(t)
     }
 
     /// The segment as a unit direction and the parameter where it stops (just short of `to`,
@@ -191,6 +211,52 @@ impl Reference {
         self.occluders
             .iter()
             .any(|o| self.blocks(o, from, dir, t_max))
+    }
+
+    /// Every triangle blocking the segment, nearest first (every triangle is tested: this is
+    /// for explaining one pixel).
+    pub fn blockers(&self, from: DVec3, to: DVec3) -> Vec<Blocker> {
+        let Some((dir, t_max)) = Self::segment(from, to) else {
+            return Vec::new();
+        };
+        let mut hits: Vec<Blocker> = self
+            .occluders
+            .iter()
+            .filter_map(|o| {
+                let distance = self.block_distance(o, from, dir, t_max)?;
+                let normal = (o.v[1] - o.v[0]).cross(o.v[2] - o.v[0]);
+                Some(Blocker {
+                    surface: o.surface,
+                    distance,
+                    triangle: o.v,
+                    faces_light: normal.dot(to - o.v[0]) > 0.0,
+                })
+            })
+            .collect();
+        hits.sort_by(|a, b| a.distance.total_cmp(&b.distance));
+        hits
+    }
+
+    /// The nearest triangle along the ray from `from` in unit direction `dir`, within
+    /// `max_distance` (through the BVH; alpha-tested texels that fail let the ray through).
+    pub fn nearest_hit(&self, from: DVec3, dir: DVec3, max_distance: f64) -> Option<Blocker> {
+        let ray = Ray::new(
+            Point3::new(from.x, from.y, from.z),
+            Vector3::new(dir.x, dir.y, dir.z),
+        );
+        self.bvh
+            .traverse_iterator(&ray, &self.occluders)
+            .filter_map(|o| Some((o, self.block_distance(o, from, dir, max_distance)?)))
+            .min_by(|a, b| a.1.total_cmp(&b.1))
+            .map(|(o, distance)| {
+                let normal = (o.v[1] - o.v[0]).cross(o.v[2] - o.v[0]);
+                Blocker {
+                    surface: o.surface,
+                    distance,
+                    triangle: o.v,
+                    faces_light: normal.dot(from - o.v[0]) > 0.0,
+                }
+            })
     }
 
     /// Whether the light at `light` is blocked from surface point `p` with normal `n`.

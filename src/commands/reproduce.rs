@@ -1,0 +1,78 @@
+//! `shadowlab reproduce`: the paper's figures and claims beside our measurements, as a report.
+
+use super::{CommonArgs, start_gl};
+use anyhow::{Context, Result, bail};
+use shadowlab::options::Options;
+use shadowlab::report::reproduce::{self, Settings};
+use std::path::PathBuf;
+
+#[derive(clap::Args)]
+pub struct Args {
+    /// Folder for index.html, index.md, results.json and the images (created if missing).
+    #[arg(long)]
+    out: PathBuf,
+    /// Folder holding the benchmark scene files.
+    #[arg(long, default_value = "assets/scenes")]
+    scenes: PathBuf,
+    /// A small run (320x240, oa_dm1 only, one frame per configuration) to check the pipeline.
+    #[arg(long)]
+    quick: bool,
+    /// Measured frames per configuration (default 3, 1 with --quick).
+    #[arg(long)]
+    frames: Option<usize>,
+    /// Unmeasured frames before each configuration (default 1, 0 with --quick).
+    #[arg(long)]
+    warmup: Option<usize>,
+}
+
+pub fn run(common: &CommonArgs, args: &Args) -> Result<()> {
+    if !args.scenes.join("oa_dm1.toml").is_file() {
+        bail!(
+            "{} holds no oa_dm1.toml: run from the repository root or give --scenes",
+            args.scenes.display()
+        );
+    }
+    let mut settings = if args.quick {
+        Settings::quick(&args.scenes)
+    } else {
+        Settings::full(&args.scenes)
+    };
+    if let Some(size) = &common.size {
+        let (w, h) = super::parse_size(size)?;
+        (settings.width, settings.height) = (w, h);
+    }
+    settings.frames = args.frames.unwrap_or(settings.frames).max(1);
+    settings.warmup = args.warmup.unwrap_or(settings.warmup);
+    settings.sets = common.sets.clone();
+    settings.progress = true;
+    // The context is made once for the whole run, on the chosen path.
+    let mut options = Options::default();
+    if let Some(b) = &common.backend {
+        options.set("backend", b).context("--backend")?;
+    }
+    options.set("width", &settings.width.to_string())?;
+    options.set("height", &settings.height.to_string())?;
+    let (_ctx, mut renderer) = start_gl(&options)?;
+    eprintln!(
+        "reproduce: {} into {} on {}",
+        if settings.quick {
+            "quick run"
+        } else {
+            "full run"
+        },
+        args.out.display(),
+        renderer.caps.renderer
+    );
+    let report = reproduce::run(&mut renderer, &settings, &args.out)?;
+    for s in &report.summary {
+        println!("{s}");
+    }
+    eprintln!(
+        "wrote {} ({} sections, {} configurations, {:.1} minutes)",
+        args.out.join("index.html").display(),
+        report.sections.len(),
+        report.rows.len(),
+        report.elapsed_s / 60.0
+    );
+    Ok(())
+}

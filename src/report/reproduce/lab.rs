@@ -1,0 +1,175 @@
+//! One loaded scene, measured: configurations as bench rows, frames as images, and the command
+//! lines that regenerate them.
+
+use super::{ReproduceError, Settings};
+use crate::gl::Renderer;
+use crate::options::Options;
+use crate::report::bench::{Bench, BenchConfig, BenchRow, BenchSettings, Capture};
+use crate::report::images::Rgba;
+use crate::scene::Scene;
+use crate::scene::path::PathKey;
+use crate::truth;
+use indicatif::ProgressBar;
+use std::path::Path;
+
+pub struct Lab<'a> {
+    bench: Bench<'a>,
+    pub scene: &'a Scene,
+    /// The scene file's name without `.toml`.
+    pub name: String,
+    /// The scene's options at the report's size.
+    pub base: Options,
+    pub quick: bool,
+    out: &'a Path,
+    bar: &'a ProgressBar,
+    rows: Vec<BenchRow>,
+}
+
+impl<'a> Lab<'a> {
+    pub fn new(
+        renderer: &'a mut Renderer,
+        scene: &'a Scene,
+        name: &str,
+        base: Options,
+        settings: &Settings,
+        out: &'a Path,
+        bar: &'a ProgressBar,
+    ) -> Lab<'a> {
+        let bench = Bench::new(
+            renderer,
+            scene,
+            BenchSettings {
+                warmup: settings.warmup,
+                frames: settings.frames,
+                path: vec![PathKey::of(&scene.camera)],
+                progress: false,
+            },
+        );
+        Lab {
+            bench,
+            scene,
+            name: name.to_string(),
+            base,
+            quick: settings.quick,
+            out,
+            bar,
+            rows: Vec::new(),
+        }
+    }
+
+    pub fn bar(&self) -> &ProgressBar {
+        self.bar
+    }
+
+    /// Where a file of the report goes.
+    pub fn out_path(&self, file: &str) -> std::path::PathBuf {
+        self.out.join(file)
+    }
+
+    /// Every row this lab measured.
+    pub fn into_rows(self) -> Vec<BenchRow> {
+        self.rows
+    }
+
+    /// The scene's options with `KEY=VALUE` assignments applied.
+    pub fn options(&self, sets: &[&str]) -> Result<Options, ReproduceError> {
+        let mut o = self.base.clone();
+        for s in sets {
+            o.set_assignment(s)?;
+        }
+        o.validate()?;
+        Ok(o)
+    }
+
+    /// Measures named configurations (`name`, assignments): time, ratio to shadows off, error.
+    pub fn measure(
+        &mut self,
+        configs: &[(&str, Vec<&str>)],
+    ) -> Result<Vec<BenchRow>, ReproduceError> {
+        let configs: Vec<BenchConfig> = configs
+            .iter()
+            .map(|(name, sets)| Ok(BenchConfig::named(name, self.options(sets)?)))
+            .collect::<Result<_, ReproduceError>>()?;
+        let mut rows = Vec::with_capacity(configs.len());
+        for c in configs {
+            self.bar
+                .set_message(format!("{}: {}", self.name, c.label()));
+            let hidden = ProgressBar::hidden();
+            rows.extend(self.bench.run_with(std::slice::from_ref(&c), &hidden)?);
+        }
+        self.rows.extend(rows.iter().cloned());
+        Ok(rows)
+    }
+
+    /// The scene camera's frame with these assignments, and the exact masks.
+    pub fn capture(&mut self, sets: &[&str]) -> Result<Capture, ReproduceError> {
+        let options = self.options(sets)?;
+        self.bar
+            .set_message(format!("{}: frame {}", self.name, sets.join(" ")));
+        Ok(self.bench.capture(&options)?)
+    }
+
+    /// Writes an image into the output folder and gives its file name.
+    pub fn save(&self, image: &Rgba, file: &str) -> Result<String, ReproduceError> {
+        image.save(&self.out_path(file))?;
+        Ok(file.to_string())
+    }
+
+    /// The frame of a capture as an image.
+    pub fn frame_image(capture: &Capture) -> Rgba {
+        Rgba {
+            width: capture.frame.width,
+            height: capture.frame.height,
+            data: capture.frame.rgba.clone(),
+        }
+    }
+
+    /// Every light's errors of a capture in one image (red false shadow, blue false lit).
+    pub fn error_image(capture: &Capture) -> Rgba {
+        let rendered: Vec<&crate::frame::Mask> = capture.frame.masks.iter().collect();
+        let exact: Vec<&crate::frame::Mask> = capture.exact.iter().collect();
+        Rgba {
+            width: capture.frame.width,
+            height: capture.frame.height,
+            data: truth::error_image_all(&rendered, &exact),
+        }
+    }
+
+    /// `shadowlab render` with this scene and these assignments, writing masks.
+    pub fn render_command(&self, sets: &[&str]) -> String {
+        let mut s = format!(
+            "shadowlab render --scene assets/scenes/{}.toml --size {}x{}",
+            self.name, self.base.width, self.base.height
+        );
+        for a in sets {
+            s.push_str(&format!(" --set {a}"));
+        }
+        s.push_str(" --mask masks/");
+        s
+    }
+
+    /// `shadowlab bench` with this scene, fixed assignments and one sweep.
+    pub fn bench_command(&self, sets: &[&str], sweep: &str) -> String {
+        let mut s = format!(
+            "shadowlab bench --scene assets/scenes/{}.toml --size {}x{}",
+            self.name, self.base.width, self.base.height
+        );
+        for a in sets {
+            s.push_str(&format!(" --set {a}"));
+        }
+        s.push_str(&format!(" --sweep {sweep}"));
+        s
+    }
+}
+
+/// Percent with a sensible number of decimals.
+pub fn pct(x: f64) -> String {
+    let p = 100.0 * x;
+    if p >= 10.0 {
+        format!("{p:.1}%")
+    } else if p >= 0.1 {
+        format!("{p:.2}%")
+    } else {
+        format!("{p:.3}%")
+    }
+}

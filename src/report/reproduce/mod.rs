@@ -1,0 +1,369 @@
+//! `reproduce`: every figure and claim of the paper (Arneson) and the thesis (Sindholt) that
+//! the pipeline can answer, set beside our own measurement of it on the OpenArena benchmark
+//! scenes, all measured in one run.
+//!
+//! The run is organised by scene (each scene is loaded once and its exact reference masks are
+//! reused by every configuration); the sections are then put in the paper's order. Every
+//! number in the report comes from this run; the paper's numbers are quoted as such.
+
+mod claims;
+mod figures;
+mod lab;
+mod page;
+mod pareto;
+
+pub use lab::{Lab, pct};
+
+use super::bench::BenchRow;
+use super::table::Table;
+use crate::gl::{RenderError, Renderer};
+use crate::options::{OptionError, Options};
+use crate::scene::Scene;
+use crate::scene::file::{SceneFile, SceneFileError};
+use indicatif::{ProgressBar, ProgressStyle};
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+#[derive(Debug, thiserror::Error)]
+pub enum ReproduceError {
+    #[error(transparent)]
+    Render(#[from] RenderError),
+    #[error("scene {name}: {source}")]
+    Scene {
+        name: String,
+        source: Box<SceneFileError>,
+    },
+    #[error(transparent)]
+    Option(#[from] OptionError),
+    #[error("{path}: {source}")]
+    Io {
+        path: PathBuf,
+        source: std::io::Error,
+    },
+    #[error("writing an image: {0}")]
+    Image(#[from] image::ImageError),
+    #[error("drawing a plot: {0}")]
+    Plot(String),
+    #[error("{0}")]
+    Json(#[from] serde_json::Error),
+}
+
+/// What a run measures and how much.
+#[derive(Debug, Clone)]
+pub struct Settings {
+    /// Where the benchmark scene files are (`assets/scenes`).
+    pub scenes_dir: PathBuf,
+    /// A small run for tests: 320x240, one scene for the sweeps, one frame per configuration.
+    pub quick: bool,
+    pub width: u32,
+    pub height: u32,
+    pub warmup: usize,
+    pub frames: usize,
+    /// `KEY=VALUE` settings applied to every configuration (after each scene's `[options]`).
+    pub sets: Vec<String>,
+    pub progress: bool,
+}
+
+impl Settings {
+    /// The full report at the paper's 640x480: one warm-up and three measured frames each.
+    pub fn full(scenes_dir: &Path) -> Settings {
+        Settings {
+            scenes_dir: scenes_dir.to_path_buf(),
+            quick: false,
+            width: 640,
+            height: 480,
+            warmup: 1,
+            frames: 3,
+            sets: Vec::new(),
+            progress: true,
+        }
+    }
+
+    /// A small run that still measures every section (for tests).
+    pub fn quick(scenes_dir: &Path) -> Settings {
+        Settings {
+            quick: true,
+            width: 320,
+            height: 240,
+            warmup: 0,
+            frames: 1,
+            progress: false,
+            ..Settings::full(scenes_dir)
+        }
+    }
+
+    /// The scenes whose accuracy-against-time is plotted.
+    fn sweep_scenes(&self) -> &'static [&'static str] {
+        if self.quick {
+            &["oa_dm1"]
+        } else {
+            &[
+                "oa_dm1",
+                "q3dm6ish",
+                "wrackdm17",
+                "ctf_compromise",
+                "oa_dm3",
+            ]
+        }
+    }
+}
+
+/// An image of a section, as a file in the output folder.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Figure {
+    pub file: String,
+    pub caption: String,
+}
+
+/// One figure or claim of the paper, with our measurement.
+#[derive(Debug, Clone, Default)]
+pub struct Section {
+    pub id: String,
+    pub title: String,
+    /// What the paper or thesis shows or says (paraphrased, its numbers quoted).
+    pub source: String,
+    /// What this run measured, as sentences built from the numbers.
+    pub findings: Vec<String>,
+    pub figures: Vec<Figure>,
+    pub tables: Vec<Table>,
+    /// Commands that regenerate the section's numbers and images.
+    pub regenerate: Vec<String>,
+    /// The key numbers, by name (for the summary and for tests).
+    pub numbers: BTreeMap<String, f64>,
+}
+
+impl Section {
+    fn new(id: &str, title: &str, source: &str) -> Section {
+        Section {
+            id: id.to_string(),
+            title: title.to_string(),
+            source: source.to_string(),
+            ..Section::default()
+        }
+    }
+
+    /// A key number (0 when the section did not measure it).
+    pub fn number(&self, key: &str) -> f64 {
+        self.numbers.get(key).copied().unwrap_or(0.0)
+    }
+}
+
+/// The whole report.
+#[derive(Debug, Clone, Default)]
+pub struct Report {
+    /// Sentences that sum the run up.
+    pub summary: Vec<String>,
+    /// Machine, GL, settings and scene warnings.
+    pub environment: Vec<String>,
+    pub sections: Vec<Section>,
+    /// Every measured configuration.
+    pub rows: Vec<BenchRow>,
+    pub elapsed_s: f64,
+}
+
+impl Report {
+    pub fn section(&self, id: &str) -> Option<&Section> {
+        self.sections.iter().find(|s| s.id == id)
+    }
+}
+
+/// Loads one benchmark scene and the options that apply to it.
+fn load_scene(
+    settings: &Settings,
+    name: &str,
+) -> Result<(Scene, Options, Vec<String>), ReproduceError> {
+    let path = settings.scenes_dir.join(format!("{name}.toml"));
+    let wrap = |e: SceneFileError| ReproduceError::Scene {
+        name: name.to_string(),
+        source: Box::new(e),
+    };
+    let file = SceneFile::read(&path).map_err(wrap)?;
+    let mut options = Options::default();
+    options.apply_toml(&file.options)?;
+    for s in &settings.sets {
+        options.set_assignment(s)?;
+    }
+    options.set("width", &settings.width.to_string())?;
+    options.set("height", &settings.height.to_string())?;
+    options.validate()?;
+    let (scene, report) = file.build(&options).map_err(wrap)?;
+    let mut warnings = report.warnings;
+    let reference = crate::truth::Reference::build(&scene);
+    warnings.extend(crate::truth::enclosure::warnings(&scene, &reference));
+    Ok((scene, options, warnings))
+}
+
+/// The order sections appear in, whatever order they were measured in.
+const ORDER: &[&str] = &[
+    "paper-fig1",
+    "paper-fig2",
+    "thesis-fig10",
+    "thesis-fig12",
+    "thesis-fig13-14",
+    "thesis-fig20-21",
+    "thesis-fig22",
+    "claim-sm-lights",
+    "claim-sv-lights",
+];
+
+/// Runs every section and writes `out/index.html`, `out/index.md`, `out/results.json` and the
+/// images.
+pub fn run(
+    renderer: &mut Renderer,
+    settings: &Settings,
+    out: &Path,
+) -> Result<Report, ReproduceError> {
+    let start = Instant::now();
+    std::fs::create_dir_all(out).map_err(|source| ReproduceError::Io {
+        path: out.to_path_buf(),
+        source,
+    })?;
+    let sweep_scenes = settings.sweep_scenes();
+    // Units of work: the figure sections and both claims, then one sweep per scene.
+    let figure_units = figures::SECTIONS + 2 * claims::SECTIONS;
+    let bar = if settings.progress {
+        let b = ProgressBar::new((figure_units + sweep_scenes.len()) as u64);
+        b.set_style(
+            ProgressStyle::with_template(
+                "reproduce [{elapsed_precise}] {bar:30} {pos}/{len} sections  {msg}",
+            )
+            .unwrap_or_else(|_| ProgressStyle::default_bar()),
+        );
+        b
+    } else {
+        ProgressBar::hidden()
+    };
+    let mut report = Report {
+        environment: vec![
+            format!(
+                "Renderer: {} ({}), {}",
+                renderer.caps.renderer, renderer.caps.version, renderer.caps.vendor
+            ),
+            format!(
+                "{}x{}, {} warm-up and {} measured frames per configuration; times are medians; \
+                 error is measured on the first frame against the exact ray-cast reference.",
+                settings.width, settings.height, settings.warmup, settings.frames
+            ),
+            format!(
+                "Machine: {} CPU threads; shadowlab {}.",
+                std::thread::available_parallelism().map_or(0, |n| n.get()),
+                env!("CARGO_PKG_VERSION")
+            ),
+        ],
+        ..Report::default()
+    };
+    if !settings.sets.is_empty() {
+        report.environment.push(format!(
+            "Options set for every configuration: {}",
+            settings.sets.join(" ")
+        ));
+    }
+    let mut sections: Vec<Section> = Vec::new();
+
+    // The figures and the claims on the scenes they name.
+    for name in ["oa_dm1", "q3dm6ish"] {
+        if settings.quick && name != "oa_dm1" {
+            continue;
+        }
+        let (scene, options, warnings) = load_scene(settings, name)?;
+        report
+            .environment
+            .extend(warnings.iter().map(|w| format!("{name}: {w}")));
+        renderer.load_scene(&scene)?;
+        let mut lab = Lab::new(renderer, &scene, name, options, settings, out, &bar);
+        if name == "oa_dm1" {
+            sections.extend(figures::run(&mut lab)?);
+        }
+        sections.extend(claims::run(&mut lab)?);
+        report.rows.extend(lab.into_rows());
+    }
+    if settings.quick {
+        // q3dm6ish's claims were skipped: count them as done.
+        bar.inc(claims::SECTIONS as u64);
+    }
+
+    // Accuracy against time on every scene.
+    let mut sweeps = Vec::new();
+    for name in sweep_scenes {
+        let (scene, options, warnings) = load_scene(settings, name)?;
+        if !settings.quick || *name != "oa_dm1" {
+            report
+                .environment
+                .extend(warnings.iter().map(|w| format!("{name}: {w}")));
+        }
+        renderer.load_scene(&scene)?;
+        let mut lab = Lab::new(renderer, &scene, name, options, settings, out, &bar);
+        sweeps.push(pareto::run(&mut lab)?);
+        report.rows.extend(lab.into_rows());
+        bar.inc(1);
+    }
+    report.environment.sort();
+    report.environment.dedup();
+
+    // Claims measured on two scenes are merged into one section each.
+    let mut merged: Vec<Section> = Vec::new();
+    for s in sections {
+        match merged.iter_mut().find(|m| m.id == s.id) {
+            Some(m) => m.absorb(s),
+            None => merged.push(s),
+        }
+    }
+    merged.sort_by_key(|s| ORDER.iter().position(|o| *o == s.id).unwrap_or(ORDER.len()));
+    report.summary = summary(&merged, &sweeps);
+    merged.extend(sweeps);
+    report.sections = merged;
+    report.elapsed_s = start.elapsed().as_secs_f64();
+    bar.finish_and_clear();
+    page::write(&report, out)?;
+    Ok(report)
+}
+
+impl Section {
+    /// Appends another scene's measurement of the same claim.
+    fn absorb(&mut self, other: Section) {
+        self.findings.extend(other.findings);
+        self.figures.extend(other.figures);
+        self.tables.extend(other.tables);
+        self.regenerate.extend(other.regenerate);
+        self.numbers.extend(other.numbers);
+    }
+}
+
+/// A few sentences over the whole run, each from measured numbers.
+fn summary(sections: &[Section], sweeps: &[Section]) -> Vec<String> {
+    let mut out = Vec::new();
+    let get = |id: &str| sections.iter().find(|s| s.id == id);
+    if let Some(s) = get("paper-fig2") {
+        out.push(format!(
+            "Shadow-map resolution (paper Fig. 2): error falls from {} at 64x64 to {} at 512x512 \
+             on oa_dm1.",
+            pct(s.number("error_64")),
+            pct(s.number("error_512"))
+        ));
+    }
+    if let Some(s) = get("thesis-fig20-21") {
+        out.push(format!(
+            "Camera inside a shadow volume (thesis Fig. 20-21): z-pass gets {} of receiver pixels \
+             wrong, z-fail {}.",
+            pct(s.number("error_zpass")),
+            pct(s.number("error_zfail"))
+        ));
+    }
+    for s in sweeps {
+        let (sm, sv) = (s.number("sm_ratio"), s.number("sv_ratio"));
+        if sm > 0.0 && sv > 0.0 {
+            out.push(format!(
+                "{}: the paper's shadow mapping costs {:.1}x the frame time of shadows off at {} \
+                 error, its shadow volumes {:.1}x at {}; most accurate: {}.",
+                s.title.trim_start_matches("Accuracy against time: "),
+                sm,
+                pct(s.number("sm_error")),
+                sv,
+                pct(s.number("sv_error")),
+                s.findings.first().cloned().unwrap_or_default()
+            ));
+        }
+    }
+    out
+}

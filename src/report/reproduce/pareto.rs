@@ -1,0 +1,210 @@
+//! Accuracy against time on one scene: every technique with its main toggles, a plot, and the
+//! configurations no other beats in both time and error (the Pareto front).
+
+use super::lab::{Lab, pct};
+use super::{Figure, ReproduceError, Section};
+use crate::report::bench::BenchRow;
+use crate::report::plot;
+use crate::report::table::{Align, Table, bench_table};
+
+/// The configurations: the paper's choices first, then the toggles that matter most.
+fn configs(quick: bool) -> Vec<(&'static str, Vec<&'static str>)> {
+    const SM: &str = "technique=shadow_map";
+    const SV: &str = "technique=shadow_volume";
+    if quick {
+        return vec![
+            ("shadows off", vec!["technique=none"]),
+            ("SM 512 (paper)", vec![SM]),
+            (
+                "SM 256 pcf3x3",
+                vec![
+                    SM,
+                    "shadow_map.size=256",
+                    "shadow_map.filter=pcf3x3",
+                    "shadow_map.result=intensity",
+                ],
+            ),
+            ("SV z-fail (paper)", vec![SV]),
+            ("SV z-pass", vec![SV, "shadow_volume.counting=zpass"]),
+        ];
+    }
+    vec![
+        ("shadows off", vec!["technique=none"]),
+        ("SM 512 (paper)", vec![SM]),
+        ("SM 256", vec![SM, "shadow_map.size=256"]),
+        ("SM 1024", vec![SM, "shadow_map.size=1024"]),
+        ("SM 2048", vec![SM, "shadow_map.size=2048"]),
+        (
+            "SM 512 pcf3x3",
+            vec![
+                SM,
+                "shadow_map.filter=pcf3x3",
+                "shadow_map.result=intensity",
+            ],
+        ),
+        ("SM 512 fbo", vec![SM, "shadow_map.depth_source=fbo"]),
+        ("SM 512 back faces", vec![SM, "shadow_map.cull=back"]),
+        ("SV z-fail (paper)", vec![SV]),
+        ("SV z-pass", vec![SV, "shadow_volume.counting=zpass"]),
+        ("SV auto", vec![SV, "shadow_volume.counting=auto"]),
+        ("SV two-sided", vec![SV, "shadow_volume.stencil=separate"]),
+        (
+            "SV signed edges",
+            vec![SV, "shadow_volume.edge_rule=signed"],
+        ),
+    ]
+}
+
+/// For each row, whether no other row with shadows is at least as fast and as accurate and
+/// strictly better in one of the two.
+pub fn pareto_front(rows: &[BenchRow]) -> Vec<bool> {
+    let shadows = |r: &BenchRow| r.technique != "none";
+    rows.iter()
+        .map(|a| {
+            shadows(a)
+                && !rows.iter().any(|b| {
+                    shadows(b)
+                        && b.frame_ms.median <= a.frame_ms.median
+                        && b.error.total <= a.error.total
+                        && (b.frame_ms.median < a.frame_ms.median || b.error.total < a.error.total)
+                })
+        })
+        .collect()
+}
+
+pub fn run(lab: &mut Lab) -> Result<Section, ReproduceError> {
+    let name = lab.name.clone();
+    let mut s = Section::new(
+        &format!("sweep-{name}"),
+        &format!("Accuracy against time: {name}"),
+        "Not a figure of the paper: what each choice costs in time and buys in accuracy on this \
+         scene, measured in this run.",
+    );
+    let configs = configs(lab.quick);
+    let rows = lab.measure(&configs)?;
+    let front = pareto_front(&rows);
+    let file = format!("sweep-{name}.png");
+    plot::error_vs_time_marked(
+        &rows,
+        &front,
+        &format!(
+            "{name}: error against frame time ({} lights, ringed: Pareto front)",
+            lab.scene.lights.len()
+        ),
+        &lab.out_path(&file),
+    )
+    .map_err(ReproduceError::Plot)?;
+    s.figures.push(Figure {
+        file,
+        caption: format!(
+            "{name}: error against median frame time; ringed points are on the Pareto front"
+        ),
+    });
+    let mut best = Table::new(&[
+        ("Pareto-best configuration", Align::Left),
+        ("frame ms", Align::Right),
+        ("× shadows off", Align::Right),
+        ("error", Align::Right),
+        ("error excl. boundary", Align::Right),
+    ]);
+    let mut on_front: Vec<&BenchRow> = rows
+        .iter()
+        .zip(&front)
+        .filter(|(_, f)| **f)
+        .map(|(r, _)| r)
+        .collect();
+    on_front.sort_by(|a, b| a.frame_ms.median.total_cmp(&b.frame_ms.median));
+    for r in &on_front {
+        best.push(vec![
+            r.label.clone(),
+            format!("{:.1}", r.frame_ms.median),
+            format!("{:.2}", r.ratio_to_shadows_off),
+            pct(r.error.total),
+            pct(r.error.total_excl_boundary),
+        ]);
+    }
+    // The first finding names the most accurate configuration (the summary quotes it).
+    if let Some(r) = rows
+        .iter()
+        .filter(|r| r.technique != "none")
+        .min_by(|a, b| a.error.total.total_cmp(&b.error.total))
+    {
+        s.findings.push(format!(
+            "{} ({} error, {:.1}x shadows off)",
+            r.label,
+            pct(r.error.total),
+            r.ratio_to_shadows_off
+        ));
+    }
+    for (label, key) in [("SM 512 (paper)", "sm"), ("SV z-fail (paper)", "sv")] {
+        if let Some(r) = rows.iter().find(|r| r.label == label) {
+            s.numbers
+                .insert(format!("{key}_ratio"), r.ratio_to_shadows_off);
+            s.numbers.insert(format!("{key}_error"), r.error.total);
+        }
+    }
+    s.findings.push(format!(
+        "On the Pareto front, fastest first: {}.",
+        on_front
+            .iter()
+            .map(|r| r.label.clone())
+            .collect::<Vec<_>>()
+            .join(", ")
+    ));
+    s.tables.push(best);
+    s.tables.push(bench_table(&rows));
+    for (_, sets) in &configs {
+        s.regenerate.push(lab.render_command(sets));
+    }
+    Ok(s)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::options::Options;
+    use crate::report::bench::{ErrorRow, Median, MsStats};
+    use std::collections::BTreeMap;
+
+    fn row(technique: &str, ms: f64, error: f64) -> BenchRow {
+        BenchRow {
+            scene: "s".into(),
+            technique: technique.into(),
+            label: format!("{technique} {ms} {error}"),
+            swept: BTreeMap::new(),
+            options: Options::default(),
+            width: 1,
+            height: 1,
+            lights: 1,
+            frames: 1,
+            frame_ms: MsStats {
+                median: ms,
+                min: ms,
+                max: ms,
+            },
+            shadows_off_frame_ms: Median { median: 1.0 },
+            ratio_to_shadows_off: ms,
+            pass_ms: BTreeMap::new(),
+            clock: "cpu".into(),
+            error: ErrorRow {
+                total: error,
+                ..ErrorRow::default()
+            },
+            error_per_light: Vec::new(),
+            volumes: Vec::new(),
+        }
+    }
+
+    #[test]
+    fn the_front_keeps_only_undominated_rows_with_shadows() {
+        let rows = [
+            row("none", 1.0, 0.5),
+            row("shadow_map", 2.0, 0.1),
+            row("shadow_map", 3.0, 0.2),
+            row("shadow_volume", 4.0, 0.01),
+            row("shadow_volume", 4.0, 0.01),
+            row("shadow_volume", 5.0, 0.01),
+        ];
+        assert_eq!(pareto_front(&rows), [false, true, false, true, true, false]);
+    }
+}
