@@ -100,5 +100,19 @@ void main() {
     if (!lit) discard;
 #endif
     o_color = vec4(albedo.rgb * u_light_color * diffuse * scale, 1.0);
+#ifdef TEXEL_GRID
+    // Debug view: the shadow map's texels projected onto the receivers, as a checkerboard (one
+    // square per texel), which stays readable where a texel covers only a few pixels.
+#ifdef SHADOW_CUBE
+    vec3 d = v_world - u_light_pos;
+    vec3 a = abs(d);
+    vec2 face_uv = (a.x >= a.y && a.x >= a.z) ? d.yz / a.x : ((a.y >= a.z) ? d.xz / a.y : d.xy / a.z);
+    vec2 texel = (face_uv * 0.5 + 0.5) * u_map_size;
+#else
+    vec2 texel = v_shadow.xy / v_shadow.w * u_map_size;
+#endif
+    ivec2 cell = ivec2(floor(texel));
+    if (((cell.x + cell.y) & 1) == 1) o_color.rgb *= vec3(0.55, 0.6, 1.0);
+#endif
 #endif
 }

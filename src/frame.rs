@@ -4,6 +4,62 @@ use glam::{Mat4, Vec3};
 use serde::Serialize;
 use std::path::Path;
 
+/// An RGBA8 image, top row first.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Rgba {
+    pub width: u32,
+    pub height: u32,
+    pub data: Vec<u8>,
+}
+
+impl Rgba {
+    pub fn save(&self, path: &Path) -> Result<(), image::ImageError> {
+        image::save_buffer(
+            path,
+            &self.data,
+            self.width,
+            self.height,
+            image::ExtendedColorType::Rgba8,
+        )
+    }
+}
+
+/// What a step of a frame does (the walkthrough steps through them).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum StepKind {
+    /// Draw the casters' depth from a light (one view or cube face).
+    LightView,
+    /// Copy the depth buffer into the shadow map texture.
+    DepthCopy,
+    /// The unlit world: depth and baked light.
+    Base,
+    /// Count a light's shadow volumes into the stencil buffer.
+    Stencil,
+    /// A light's additive pass.
+    Lit,
+    /// The fill quad that darkens where the stencil is set.
+    Fill,
+}
+
+/// One executed step of a frame.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Step {
+    pub kind: StepKind,
+    pub light: Option<usize>,
+    /// The shadow-map view (spot, six-spot face) or cube face, for light views and copies.
+    pub face: Option<usize>,
+}
+
+/// A light's stencil counts after its volume pass (row-major, top row first).
+#[derive(Debug, Clone, PartialEq)]
+pub struct StencilImage {
+    pub light: usize,
+    pub width: u32,
+    pub height: u32,
+    pub values: Vec<u8>,
+}
+
 /// Time spent in one pass of a frame.
 #[derive(Debug, Clone, Serialize, PartialEq)]
 pub struct PassTime {
@@ -110,6 +166,14 @@ pub struct Frame {
     pub masks: Vec<Mask>,
     /// Shadow-volume work per light (shadow volumes only).
     pub volumes: Vec<crate::gl::volumes::VolumeStats>,
+    /// The steps executed, in order (all of them unless the request stopped early).
+    pub steps: Vec<Step>,
+    /// The buffer the last step wrote, as an image, when the request stopped after a step.
+    pub step_image: Option<Rgba>,
+    /// A light's stencil counts, when the request asked for them.
+    pub stencil: Option<StencilImage>,
+    /// What the plan decided (visible surfaces, triangles, BSP culling).
+    pub plan_stats: crate::plan::PlanStats,
 }
 
 impl Frame {

@@ -14,3 +14,4 @@ pub mod report;
 pub mod scene;
 pub mod shadow;
 pub mod truth;
+pub mod viewer;

@@ -29,6 +29,8 @@ enum Command {
     Bench(commands::bench::Args),
     /// Regenerate the paper's figures and claims beside our measurements (index.html + .md).
     Reproduce(commands::reproduce::Args),
+    /// Open the walkthrough viewer in a window (F1 for keys).
+    View(commands::view::Args),
 }
 
 fn main() {
@@ -43,6 +45,7 @@ fn main() {
         Command::Inspect(a) => commands::inspect::run(&cli.common, &a),
         Command::Bench(a) => commands::bench::run(&cli.common, &a),
         Command::Reproduce(a) => commands::reproduce::run(&cli.common, &a),
+        Command::View(a) => commands::view::run(&cli.common, &a),
     };
     if let Err(e) = result {
         eprintln!("error: {e:#}");

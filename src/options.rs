@@ -38,6 +38,21 @@ pub trait OptionValue: Sized {
     fn check_range(&self, _lo: f64, _hi: f64) -> Result<(), String> {
         Ok(())
     }
+    /// What an editor needs to show the value (`range`: the declared bounds, if any).
+    fn kind(_range: Option<(f64, f64)>) -> OptionKind {
+        OptionKind::Text
+    }
+}
+
+/// The shape of an option's value, for editors (the viewer's panel).
+#[derive(Debug, Clone, PartialEq, Serialize)]
+#[serde(tag = "kind", rename_all = "snake_case")]
+pub enum OptionKind {
+    Bool,
+    Choice { choices: Vec<&'static str> },
+    Float { min: f64, max: f64 },
+    Integer { min: f64, max: f64 },
+    Text,
 }
 
 macro_rules! numeric_option_value {
@@ -51,6 +66,14 @@ macro_rules! numeric_option_value {
             }
             fn format_value(&self) -> String {
                 self.to_string()
+            }
+            fn kind(range: Option<(f64, f64)>) -> OptionKind {
+                let (min, max) = range.unwrap_or((<$t>::MIN as f64, <$t>::MAX as f64));
+                if stringify!($t).starts_with('f') {
+                    OptionKind::Float { min, max }
+                } else {
+                    OptionKind::Integer { min, max }
+                }
             }
             fn check_range(&self, lo: f64, hi: f64) -> Result<(), String> {
                 let v = *self as f64;
@@ -80,6 +103,21 @@ impl OptionValue for bool {
     }
     fn format_value(&self) -> String {
         self.to_string()
+    }
+    fn kind(_range: Option<(f64, f64)>) -> OptionKind {
+        OptionKind::Bool
+    }
+}
+
+impl OptionValue for String {
+    fn type_name() -> String {
+        "string".to_string()
+    }
+    fn parse_value(text: &str) -> Result<Self, String> {
+        Ok(text.trim().to_string())
+    }
+    fn format_value(&self) -> String {
+        self.clone()
     }
 }
 
@@ -120,6 +158,9 @@ macro_rules! option_enum {
             fn format_value(&self) -> String {
                 self.as_str().to_string()
             }
+            fn kind(_range: Option<(f64, f64)>) -> $crate::options::OptionKind {
+                $crate::options::OptionKind::Choice { choices: vec![$($text),+] }
+            }
         }
     };
 }
@@ -132,6 +173,9 @@ pub struct OptionSpec {
     pub type_name: String,
     pub default: String,
     pub meaning: String,
+    /// The value's shape, for editors.
+    #[serde(flatten)]
+    pub kind: OptionKind,
 }
 
 fn join_doc(lines: &[&str]) -> String {
@@ -209,6 +253,9 @@ macro_rules! define_options {
                             $( + &format!(" ({}..={})", $rlo, $rhi) )?,
                         default: defaults.$rfield.format_value(),
                         meaning: join_doc(&[$($rdoc),*]),
+                        kind: <$rty as OptionValue>::kind(
+                            None $( .or(Some(($rlo as f64, $rhi as f64))) )?
+                        ),
                     });
                 )*
                 $($(
@@ -218,6 +265,9 @@ macro_rules! define_options {
                             $( + &format!(" ({}..={})", $flo, $fhi) )?,
                         default: defaults.$group.$field.format_value(),
                         meaning: join_doc(&[$($fdoc),*]),
+                        kind: <$fty as OptionValue>::kind(
+                            None $( .or(Some(($flo as f64, $fhi as f64))) )?
+                        ),
                     });
                 )*)*
                 specs
@@ -515,6 +565,10 @@ define_options! {
         lights: bool = true;
         /// Comma-separated light indices to draw, or `all`.
         only: String = "all".to_string();
+        /// Per-light technique overrides, `index:technique` pairs separated by commas (e.g.
+        /// `0:shadow_volume,2:shadow_map`); other lights use `technique` (thesis 7: pick the
+        /// algorithm per case).
+        techniques: String = String::new();
         /// Brightness of the unlit pass where a surface has no lightmap (built-in scene, paper 2.4).
         ambient: f32 = 0.2, in 0.0 ..= 4.0;
         /// Use maps' lightmaps and vertex light in the unlit pass; off draws every surface at the
@@ -624,18 +678,6 @@ define_options! {
     }
 }
 
-impl OptionValue for String {
-    fn type_name() -> String {
-        "string".to_string()
-    }
-    fn parse_value(text: &str) -> Result<Self, String> {
-        Ok(text.trim().to_string())
-    }
-    fn format_value(&self) -> String {
-        self.clone()
-    }
-}
-
 impl Options {
     /// Applies `key=value`.
     pub fn set_assignment(&mut self, assignment: &str) -> Result<(), OptionError> {
@@ -700,8 +742,65 @@ impl Options {
             .any(|i| i == index)
     }
 
+    /// The `lighting.techniques` overrides, in order.
+    fn technique_overrides(&self) -> Result<Vec<(usize, Technique)>, OptionError> {
+        let text = self.lighting.techniques.trim();
+        if text.is_empty() {
+            return Ok(Vec::new());
+        }
+        let bad = |reason: String| bad_value("lighting.techniques", text, reason);
+        text.split(',')
+            .map(|pair| {
+                let (index, technique) = pair
+                    .split_once(':')
+                    .ok_or_else(|| bad(format!("`{pair}` is not index:technique")))?;
+                let index = index
+                    .trim()
+                    .parse::<usize>()
+                    .map_err(|e| bad(format!("`{index}`: {e}")))?;
+                let technique = Technique::parse_value(technique).map_err(bad)?;
+                Ok((index, technique))
+            })
+            .collect()
+    }
+
+    /// The technique light `index` uses: its override, else `technique`.
+    pub fn technique_for(&self, index: usize) -> Technique {
+        self.technique_overrides()
+            .unwrap_or_default()
+            .iter()
+            .rev()
+            .find(|(i, _)| *i == index)
+            .map_or(self.technique, |(_, t)| *t)
+    }
+
+    /// Sets (or with `None` removes) light `index`'s technique override.
+    pub fn set_technique_for(&mut self, index: usize, technique: Option<Technique>) {
+        let mut pairs: Vec<(usize, Technique)> = self
+            .technique_overrides()
+            .unwrap_or_default()
+            .into_iter()
+            .filter(|(i, _)| *i != index)
+            .collect();
+        if let Some(t) = technique {
+            pairs.push((index, t));
+        }
+        pairs.sort_by_key(|(i, _)| *i);
+        self.lighting.techniques = pairs
+            .iter()
+            .map(|(i, t)| format!("{i}:{t}"))
+            .collect::<Vec<_>>()
+            .join(",");
+    }
+
+    /// Every technique some light of a scene with `lights` lights uses.
+    pub fn uses(&self, lights: usize, technique: Technique) -> bool {
+        (0..lights).any(|i| self.light_enabled(i) && self.technique_for(i) == technique)
+    }
+
     /// Validates cross-field rules that a single `set` cannot see.
     pub fn validate(&self) -> Result<(), OptionError> {
+        self.technique_overrides()?;
         let only = self.lighting.only.trim();
         if !(only.is_empty() || only.eq_ignore_ascii_case("all")) {
             for part in only.split(',') {
@@ -748,6 +847,48 @@ mod tests {
             assert_eq!(o.get(spec.key).unwrap(), spec.default);
             assert!(!spec.meaning.is_empty(), "{} has no meaning", spec.key);
         }
+    }
+
+    #[test]
+    fn per_light_techniques_override_the_global_one() {
+        let mut o = Options::default();
+        o.set("technique", "shadow_map").unwrap();
+        o.set("lighting.techniques", "1:shadow_volume, 3:none")
+            .unwrap();
+        o.validate().unwrap();
+        assert_eq!(o.technique_for(0), Technique::ShadowMap);
+        assert_eq!(o.technique_for(1), Technique::ShadowVolume);
+        assert_eq!(o.technique_for(3), Technique::None);
+        assert!(o.uses(2, Technique::ShadowVolume) && !o.uses(1, Technique::ShadowVolume));
+        o.set_technique_for(1, None);
+        o.set_technique_for(0, Some(Technique::ShadowVolume));
+        assert_eq!(o.lighting.techniques, "0:shadow_volume,3:none");
+        for bad in ["1", "x:shadow_map", "1:nope"] {
+            o.set("lighting.techniques", bad).unwrap();
+            assert!(o.validate().is_err(), "{bad}");
+        }
+    }
+
+    #[test]
+    fn specs_describe_their_values_for_editors() {
+        let specs = Options::specs();
+        let kind = |k: &str| specs.iter().find(|s| s.key == k).unwrap().kind.clone();
+        assert_eq!(kind("culling.pvs"), OptionKind::Bool);
+        assert_eq!(
+            kind("technique"),
+            OptionKind::Choice {
+                choices: vec!["none", "shadow_map", "shadow_volume"]
+            }
+        );
+        assert_eq!(
+            kind("shadow_map.size"),
+            OptionKind::Integer {
+                min: 16.0,
+                max: 8192.0
+            }
+        );
+        assert!(matches!(kind("lighting.ambient"), OptionKind::Float { max, .. } if max == 4.0));
+        assert_eq!(kind("lighting.only"), OptionKind::Text);
     }
 
     #[test]

@@ -39,7 +39,14 @@ fn a_square_occluder_under_a_point_light_casts_the_analytic_square() {
     let (_ctx, mut r) = gl_on(BackendChoice::Egl, &options);
     r.load_scene(&scene).unwrap();
     let frame = r
-        .render_with(&scene, &options, FrameRequest { masks: true })
+        .render_with(
+            &scene,
+            &options,
+            FrameRequest {
+                masks: true,
+                ..FrameRequest::default()
+            },
+        )
         .unwrap();
     let g = frame.gbuffer.as_ref().unwrap();
     let reference = Reference::build(&scene);
@@ -87,7 +94,14 @@ fn with_shadows_off_every_reference_shadow_is_a_false_lit_pixel() {
     let (_ctx, mut r) = gl_on(BackendChoice::Egl, &options);
     r.load_scene(&scene).unwrap();
     let frame = r
-        .render_with(&scene, &options, FrameRequest { masks: true })
+        .render_with(
+            &scene,
+            &options,
+            FrameRequest {
+                masks: true,
+                ..FrameRequest::default()
+            },
+        )
         .unwrap();
     let reference = Reference::build(&scene);
     assert_eq!(frame.masks.len(), 2);
@@ -130,7 +144,14 @@ fn masks_and_metrics_agree_with_a_brute_force_ray_cast() {
     let (_ctx, mut r) = gl_on(BackendChoice::Egl, &options);
     r.load_scene(&scene).unwrap();
     let frame = r
-        .render_with(&scene, &options, FrameRequest { masks: true })
+        .render_with(
+            &scene,
+            &options,
+            FrameRequest {
+                masks: true,
+                ..FrameRequest::default()
+            },
+        )
         .unwrap();
     let g = frame.gbuffer.as_ref().unwrap();
     let reference = Reference::build(&scene);

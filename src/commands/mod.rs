@@ -6,6 +6,7 @@ pub mod inspect;
 pub mod options;
 pub mod render;
 pub mod reproduce;
+pub mod view;
 
 use anyhow::{Context, Result};
 use shadowlab::gl::{GlContext, Renderer, create_context};

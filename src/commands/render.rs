@@ -173,6 +173,7 @@ pub fn run(common: &CommonArgs, args: &Args) -> Result<()> {
         .collect::<Result<_>>()?;
     let request = FrameRequest {
         masks: args.mask.is_some() || !probes.is_empty(),
+        ..FrameRequest::default()
     };
     let frame = renderer.render_with(&scene, &options, request)?;
     if let Some(window) = ctx.window() {

@@ -2,6 +2,7 @@
 
 pub mod caps;
 pub mod context;
+pub mod debug;
 pub mod egl;
 pub mod osmesa;
 pub mod passes;
@@ -12,7 +13,8 @@ pub mod target;
 pub mod timing;
 pub mod upload;
 pub mod volumes;
+pub mod walkthrough;
 pub mod window;
 
 pub use context::{Backend, ContextError, GlContext, create_context};
-pub use renderer::{FrameRequest, RenderError, Renderer};
+pub use renderer::{FrameRequest, Overlays, RenderError, Renderer};

@@ -36,6 +36,8 @@ pub mod sources {
     pub const VOLUME_FRAG: &str = include_str!("../../shaders/volume.frag");
     pub const FULLSCREEN_VERT: &str = include_str!("../../shaders/fullscreen.vert");
     pub const FILL_FRAG: &str = include_str!("../../shaders/fill.frag");
+    pub const DEBUG_VOLUME_VERT: &str = include_str!("../../shaders/debug_volume.vert");
+    pub const DEBUG_VOLUME_FRAG: &str = include_str!("../../shaders/debug_volume.frag");
 }
 
 /// `#version`, the variant's defines, the shared helpers, then the stage's source.

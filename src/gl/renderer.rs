@@ -7,6 +7,7 @@
 //! timed frame.
 
 use super::caps::{self, Caps};
+use super::debug;
 use super::passes::lit::{LitShadow, ShadowBinding};
 use super::passes::shadow_map::{DepthTarget, copies_from_frame, copy_depth};
 use super::passes::{self, PassContext};
@@ -16,9 +17,10 @@ use super::target::{Framebuffer, GBufferTarget, MaskTarget};
 use super::timing::PassTimer;
 use super::upload::GpuScene;
 use super::volumes::{VolumeCache, VolumeStats};
-use crate::frame::{Frame, GBuffer, Mask};
+use crate::frame::{Frame, GBuffer, Mask, Rgba, StencilImage, Step, StepKind};
 use crate::options::{
-    Compare, CompareResult, DepthBits, Filter, Options, Outside, Technique, VolumeShading,
+    Compare, CompareResult, DepthBits, Filter, Options, Outside, StencilPasses, StencilWrap,
+    Technique, VolumeShading,
 };
 use crate::plan::{LightPlan, Plan};
 use crate::scene::{Camera, Scene};
@@ -47,12 +49,66 @@ pub enum RenderError {
 pub struct FrameRequest {
     /// The G-buffer and each light's decision mask (drawn after the timed frame).
     pub masks: bool,
+    /// Stop after this step (walkthrough): the frame then holds the steps so far and the
+    /// buffer the step wrote as `step_image`.
+    pub stop_after: Option<usize>,
+    /// Read this light's stencil counts right after its volume pass.
+    pub stencil_of: Option<usize>,
+    /// Debug drawing over the finished frame (untimed).
+    pub overlays: Overlays,
 }
 
-/// The `#define`s of the lit program for these options.
-fn lit_defines(options: &Options, cube: bool, mask: bool) -> Vec<&'static str> {
+/// Debug drawing over a frame.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct Overlays {
+    /// Shadow volumes, translucent: depth-fail parts red, depth-pass parts green.
+    pub volumes: bool,
+    /// The silhouette edges the volumes were extruded from, yellow.
+    pub silhouettes: bool,
+    /// The shadow map's texel grid on lit receivers.
+    pub texel_grid: bool,
+    /// Whose volumes and silhouettes to draw: one light, or every light when `None`.
+    pub light: Option<usize>,
+}
+
+/// Records the steps of a frame and says when to stop.
+struct Stepper {
+    stop: Option<usize>,
+    steps: Vec<Step>,
+}
+
+impl Stepper {
+    /// Records a step; true when it is the one to stop after.
+    fn record(&mut self, kind: StepKind, light: Option<usize>, face: Option<usize>) -> bool {
+        self.steps.push(Step { kind, light, face });
+        self.stop == Some(self.steps.len() - 1)
+    }
+}
+
+/// The texture a shadow-map view was rendered into in the last frame.
+#[derive(Debug, Clone, Copy)]
+struct LastMap {
+    light: usize,
+    view: usize,
+    texture: glow::Texture,
+    cube: bool,
+    size: u32,
+}
+
+/// The `#define`s of the lit program for these options: with a shadow-map lookup (`shadow_map`,
+/// from a cube map when `cube`) or without, writing light or the mask.
+fn lit_defines(
+    options: &Options,
+    shadow_map: bool,
+    cube: bool,
+    mask: bool,
+    texel_grid: bool,
+) -> Vec<&'static str> {
     let mut d = Vec::new();
-    if options.technique == Technique::ShadowMap {
+    if shadow_map {
+        if texel_grid && !mask {
+            d.push("TEXEL_GRID");
+        }
         let o = &options.shadow_map;
         d.push("SHADOW_MAP");
         if cube {
@@ -94,6 +150,8 @@ struct Programs {
     depth: Program,
     volume: Program,
     fill: Program,
+    /// Volumes and silhouettes drawn over the frame (debug overlay).
+    debug_volume: Program,
     /// Lit programs by their define set, compiled on first use.
     lit: HashMap<String, Program>,
 }
@@ -123,6 +181,13 @@ impl Programs {
                 "fill",
                 sources::FULLSCREEN_VERT,
                 Some(sources::FILL_FRAG),
+                &[],
+            )?,
+            debug_volume: Program::new(
+                gl,
+                "debug_volume",
+                sources::DEBUG_VOLUME_VERT,
+                Some(sources::DEBUG_VOLUME_FRAG),
                 &[],
             )?,
             lit: HashMap::new(),
@@ -161,6 +226,7 @@ impl Programs {
             &self.depth,
             &self.volume,
             &self.fill,
+            &self.debug_volume,
         ] {
             p.delete(gl);
         }
@@ -184,6 +250,8 @@ pub struct Renderer {
     measure_targets: Option<(GBufferTarget, MaskTarget)>,
     /// Core profile draws need a bound VAO even without attributes (full-screen triangles).
     empty_vao: glow::VertexArray,
+    /// The shadow-map views of the last frame, for the depth-map debug view.
+    last_maps: Vec<LastMap>,
 }
 
 /// One shadow-mapped view's texture, by light plan and view index.
@@ -213,6 +281,7 @@ impl Renderer {
             volumes: VolumeCache::default(),
             measure_targets: None,
             empty_vao,
+            last_maps: Vec::new(),
         })
     }
 
@@ -362,20 +431,39 @@ impl Renderer {
         // Compile what this frame needs before borrowing the programs for the passes.
         let gl_arc = self.gl.clone();
         let gl: &glow::Context = &gl_arc;
-        let mut variants: HashMap<(bool, bool), String> = HashMap::new();
-        for cube in [false, true] {
+        let mut variants: HashMap<(bool, bool, bool), String> = HashMap::new();
+        for (sm, cube) in [(false, false), (true, false), (true, true)] {
             for mask in [false, true] {
-                if (cube && !shadow_mapped) || (mask && !request.masks) {
+                if (sm && !shadow_mapped) || (mask && !request.masks) {
                     continue;
                 }
-                let key = self
-                    .programs
-                    .lit_variant(gl, &lit_defines(options, cube, mask))?;
-                variants.insert((cube, mask), key);
+                let defines = lit_defines(options, sm, cube, mask, request.overlays.texel_grid);
+                let key = self.programs.lit_variant(gl, &defines)?;
+                variants.insert((sm, cube, mask), key);
             }
         }
 
         let start = Instant::now();
+        let mut stepper = Stepper {
+            stop: request.stop_after,
+            steps: Vec::new(),
+        };
+        // Whoever drew last (a UI painter in the viewer) may have left state the passes do not
+        // set themselves.
+        // SAFETY: fixed-function state only.
+        unsafe {
+            gl.disable(glow::SCISSOR_TEST);
+            gl.disable(glow::BLEND);
+            gl.disable(glow::STENCIL_TEST);
+            gl.disable(glow::FRAMEBUFFER_SRGB);
+            gl.color_mask(true, true, true, true);
+            gl.depth_mask(true);
+            gl.pixel_store_i32(glow::UNPACK_ALIGNMENT, 4);
+        }
+        self.last_maps.clear();
+        if self.gpu.is_none() {
+            return Err(RenderError::NoScene);
+        }
         let gpu = self.gpu.as_ref().ok_or(RenderError::NoScene)?;
         let ctx = PassContext {
             gl,
@@ -411,6 +499,7 @@ impl Renderer {
                     vec![(None, view.view_proj())]
                 };
                 for (face, view_proj) in faces {
+                    let shown = face.or(Some(vi));
                     let target = match fbo {
                         Some(fbo) => DepthTarget::Fbo { fbo, texture },
                         None => DepthTarget::Copy {
@@ -429,13 +518,34 @@ impl Renderer {
                         face,
                         lp.order,
                     );
+                    if stepper.record(StepKind::LightView, Some(lp.light), shown) {
+                        let depth = if copy {
+                            debug::read_depth(gl, self.target.fbo, sm.size, sm.size)
+                        } else {
+                            debug::read_depth_texture(gl, texture, face, sm.size)
+                        };
+                        let image = debug::depth_image(&depth, sm.size, sm.size);
+                        return self.stopped(gl, plan, stepper, image, Vec::new(), start);
+                    }
                     if copy {
                         self.timer
                             .begin(gl, format!("light{}.depth_copy", lp.light));
                         copy_depth(gl, &self.target, texture, sm.size, face);
+                        if stepper.record(StepKind::DepthCopy, Some(lp.light), shown) {
+                            let depth = debug::read_depth_texture(gl, texture, face, sm.size);
+                            let image = debug::depth_image(&depth, sm.size, sm.size);
+                            return self.stopped(gl, plan, stepper, image, Vec::new(), start);
+                        }
                     }
                 }
                 ShadowMaps::configure(gl, texture, cube, sm.compare, sm.filter);
+                self.last_maps.push(LastMap {
+                    light: lp.light,
+                    view: vi,
+                    texture,
+                    cube,
+                    size: sm.size,
+                });
                 maps.push(ViewMap {
                     plan_index: pi,
                     view_index: vi,
@@ -468,7 +578,13 @@ impl Renderer {
         self.timer.begin(gl, "base");
         self.target.bind(gl);
         passes::base::draw(&ctx, &self.programs.unlit);
-        let lit_program = |cube: bool, mask: bool| &self.programs.lit[&variants[&(cube, mask)]];
+        if stepper.record(StepKind::Base, None, None) {
+            let image = self.color_image(gl);
+            return self.stopped(gl, plan, stepper, image, volume_stats, start);
+        }
+        let mut stencil_image = None;
+        let lit_program =
+            |sm: bool, cube: bool, mask: bool| &self.programs.lit[&variants[&(sm, cube, mask)]];
         let bindings = |pi: usize| -> Vec<(bool, ShadowBinding)> {
             maps.iter()
                 .filter(|m| m.plan_index == pi)
@@ -490,16 +606,43 @@ impl Renderer {
                 (Technique::ShadowVolume, Some(v)) => {
                     self.timer.begin(gl, format!("light{}.stencil", lp.light));
                     passes::stencil::draw(&ctx, &self.programs.volume, v);
+                    let wants_stencil = request.stencil_of == Some(lp.light);
+                    let stop = stepper.record(StepKind::Stencil, Some(lp.light), None);
+                    if wants_stencil || stop {
+                        let (w, h) = (self.target.width, self.target.height);
+                        let values = debug::read_stencil(gl, self.target.fbo, w, h);
+                        self.target.bind(gl);
+                        if stop {
+                            let wrap = options.shadow_volume.wrap == StencilWrap::Wrap
+                                || options.shadow_volume.stencil == StencilPasses::Separate;
+                            let image = debug::stencil_image(&values, w, h, wrap);
+                            return self.stopped(gl, plan, stepper, image, volume_stats, start);
+                        }
+                        stencil_image = Some(StencilImage {
+                            light: lp.light,
+                            width: w,
+                            height: h,
+                            values,
+                        });
+                    }
                     self.timer.begin(gl, format!("light{}.lit", lp.light));
                     passes::lit::draw(
                         &ctx,
-                        lit_program(false, false),
+                        lit_program(false, false, false),
                         lp,
                         &LitShadow::Stencil { test: !fill },
                     );
+                    if stepper.record(StepKind::Lit, Some(lp.light), None) {
+                        let image = self.color_image(gl);
+                        return self.stopped(gl, plan, stepper, image, volume_stats, start);
+                    }
                     if fill {
                         self.timer.begin(gl, format!("light{}.fill", lp.light));
                         passes::stencil::fill(gl, &self.programs.fill, self.empty_vao, FILL_SHADE);
+                        if stepper.record(StepKind::Fill, Some(lp.light), None) {
+                            let image = self.color_image(gl);
+                            return self.stopped(gl, plan, stepper, image, volume_stats, start);
+                        }
                     }
                 }
                 _ => {
@@ -508,9 +651,13 @@ impl Renderer {
                         &ctx,
                         lp,
                         &bindings(pi),
-                        |cube| lit_program(cube, false),
+                        |sm, cube| lit_program(sm, cube, false),
                         false,
                     );
+                    if stepper.record(StepKind::Lit, Some(lp.light), None) {
+                        let image = self.color_image(gl);
+                        return self.stopped(gl, plan, stepper, image, volume_stats, start);
+                    }
                 }
             }
         }
@@ -518,6 +665,26 @@ impl Renderer {
         // SAFETY: waits for the frame; no state change.
         unsafe { gl.finish() };
         let frame_ms = start.elapsed().as_secs_f64() * 1e3;
+        if request.overlays.volumes || request.overlays.silhouettes {
+            self.target.bind(gl);
+            let shown = plan
+                .lights
+                .iter()
+                .filter(|lp| request.overlays.light.is_none_or(|l| l == lp.light));
+            for lp in shown {
+                if let (Technique::ShadowVolume, Some(v)) =
+                    (lp.technique, self.volumes.get(lp.light))
+                {
+                    passes::debug::volumes(
+                        &ctx,
+                        &self.programs.debug_volume,
+                        v,
+                        request.overlays.volumes,
+                        request.overlays.silhouettes,
+                    );
+                }
+            }
+        }
         // SAFETY: error query only.
         let error = unsafe { gl.get_error() };
         if error != glow::NO_ERROR {
@@ -545,7 +712,7 @@ impl Renderer {
                             passes::stencil::draw(&ctx, &self.programs.volume, v);
                             passes::lit::draw_mask(
                                 &ctx,
-                                lit_program(false, true),
+                                lit_program(false, false, true),
                                 lp,
                                 &LitShadow::Stencil { test: true },
                             );
@@ -554,7 +721,7 @@ impl Renderer {
                             &ctx,
                             lp,
                             &bindings(pi),
-                            |cube| lit_program(cube, true),
+                            |sm, cube| lit_program(sm, cube, true),
                             true,
                         ),
                     }
@@ -579,7 +746,77 @@ impl Renderer {
             gbuffer,
             masks,
             volumes: volume_stats,
+            steps: stepper.steps,
+            step_image: None,
+            stencil: stencil_image,
+            plan_stats: plan.stats.clone(),
         })
+    }
+
+    /// The frame's colour buffer as an image.
+    fn color_image(&self, gl: &glow::Context) -> Rgba {
+        Rgba {
+            width: self.target.width,
+            height: self.target.height,
+            data: self.target.read_rgba(gl),
+        }
+    }
+
+    /// The frame as it stands after a walkthrough step, with that step's buffer as an image.
+    fn stopped(
+        &mut self,
+        gl: &glow::Context,
+        plan: &Plan,
+        stepper: Stepper,
+        image: Rgba,
+        volumes: Vec<VolumeStats>,
+        start: Instant,
+    ) -> Result<Frame, RenderError> {
+        let passes = self.timer.finish(gl);
+        // SAFETY: waits for the frame; no state change.
+        unsafe { gl.finish() };
+        Ok(Frame {
+            width: self.target.width,
+            height: self.target.height,
+            rgba: self.target.read_rgba(gl),
+            view_proj: plan.camera.view_proj,
+            passes,
+            frame_ms: start.elapsed().as_secs_f64() * 1e3,
+            gbuffer: None,
+            masks: Vec::new(),
+            volumes,
+            steps: stepper.steps,
+            step_image: Some(image),
+            stencil: None,
+            plan_stats: plan.stats.clone(),
+        })
+    }
+
+    /// How many depth images the last frame made for `light`: 1 for a spot, 6 for an omni
+    /// light (six spots, or the six faces of its cube), 0 without shadow maps.
+    pub fn shadow_map_views(&self, light: usize) -> usize {
+        self.last_maps
+            .iter()
+            .filter(|m| m.light == light)
+            .map(|m| if m.cube { 6 } else { 1 })
+            .sum()
+    }
+
+    /// The last frame's shadow map `k` of `light` (see [`Self::shadow_map_views`]) as grey.
+    pub fn shadow_map_image(&self, light: usize, k: usize) -> Option<Rgba> {
+        let gl: &glow::Context = &self.gl;
+        let mut i = 0;
+        for m in self.last_maps.iter().filter(|m| m.light == light) {
+            let faces = if m.cube { 6 } else { 1 };
+            if k < i + faces {
+                let face = m.cube.then_some(k - i);
+                let depth = debug::read_depth_texture(gl, m.texture, face, m.size);
+                let _ = m.view;
+                return Some(debug::depth_image(&depth, m.size, m.size));
+            }
+            i += faces;
+        }
+        None
     }
 
     /// Draws the last frame into the default framebuffer of a window, scaled to `width`×`height`.
@@ -612,7 +849,7 @@ fn draw_maps<'p>(
     ctx: &PassContext,
     lp: &LightPlan,
     bindings: &[(bool, ShadowBinding)],
-    program: impl Fn(bool) -> &'p Program,
+    program: impl Fn(bool, bool) -> &'p Program,
     mask: bool,
 ) {
     let pass = |p: &Program, s: &LitShadow| {
@@ -623,10 +860,10 @@ fn draw_maps<'p>(
         }
     };
     if bindings.is_empty() {
-        pass(program(false), &LitShadow::None);
+        pass(program(false, false), &LitShadow::None);
     }
     for (cube, b) in bindings {
-        pass(program(*cube), &LitShadow::Map(b));
+        pass(program(true, *cube), &LitShadow::Map(b));
     }
 }
 

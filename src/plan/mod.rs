@@ -119,7 +119,9 @@ impl Plan {
 
     /// The plan for `camera` (a camera path's frame, the viewer's camera).
     pub fn build_at(scene: &Scene, camera: &Camera, options: &Options) -> Plan {
-        let camera = if options.technique == Technique::ShadowVolume {
+        let n = scene.lights.len();
+        let uses_volumes = options.uses(n, Technique::ShadowVolume);
+        let camera = if uses_volumes {
             let far = scene
                 .bounds()
                 .corners()
@@ -178,9 +180,9 @@ impl Plan {
                 m.visible && m.casts_shadows
             })
             .collect();
-        let caster_bounds: Vec<Aabb> = match options.technique {
-            Technique::None => Vec::new(),
-            _ => scene
+        let caster_bounds: Vec<Aabb> = match options.uses(n, Technique::ShadowMap) {
+            false => Vec::new(),
+            true => scene
                 .surfaces
                 .iter()
                 .zip(&casters)
@@ -189,7 +191,7 @@ impl Plan {
                 .collect(),
         };
         // Shadow-volume casters, with their world bounds (for the depth-pass safety test).
-        let groups = (options.technique == Technique::ShadowVolume).then(|| scene.caster_groups());
+        let groups = uses_volumes.then(|| scene.caster_groups());
         let components: Vec<(usize, usize, Aabb)> = groups
             .iter()
             .flat_map(|g| g.groups.iter().enumerate())
@@ -208,17 +210,18 @@ impl Plan {
             .enumerate()
             .map(|(order, light)| {
                 let l = &scene.lights[light];
+                let technique = options.technique_for(light);
                 LightPlan {
                     light,
-                    technique: options.technique,
+                    technique,
                     order,
-                    views: match options.technique {
+                    views: match technique {
                         Technique::ShadowMap => {
                             shadow_views(l, &caster_bounds, &options.shadow_map)
                         }
                         _ => Vec::new(),
                     },
-                    volumes: match options.technique {
+                    volumes: match technique {
                         Technique::ShadowVolume => components
                             .iter()
                             .map(|&(group, component, bounds)| VolumePart {

@@ -299,9 +299,15 @@ impl<'a> Bench<'a> {
     /// The first frame of the path with `options`, compared with the exact reference.
     pub fn capture(&mut self, options: &Options) -> Result<Capture, RenderError> {
         let camera = self.settings.path[0].apply(&self.scene.camera);
-        let frame =
-            self.renderer
-                .render_at(self.scene, &camera, options, FrameRequest { masks: true })?;
+        let frame = self.renderer.render_at(
+            self.scene,
+            &camera,
+            options,
+            FrameRequest {
+                masks: true,
+                ..FrameRequest::default()
+            },
+        )?;
         let gbuffer = frame
             .gbuffer
             .as_ref()

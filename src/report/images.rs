@@ -1,27 +1,10 @@
 //! Image helpers for reports: saving, and cropping a zoomed window around shadow boundaries.
 
 use crate::frame::{Mask, MaskValue};
-use std::path::Path;
 
-/// An RGBA8 image, top row first.
-#[derive(Debug, Clone, PartialEq)]
-pub struct Rgba {
-    pub width: u32,
-    pub height: u32,
-    pub data: Vec<u8>,
-}
+pub use crate::frame::Rgba;
 
 impl Rgba {
-    pub fn save(&self, path: &Path) -> Result<(), image::ImageError> {
-        image::save_buffer(
-            path,
-            &self.data,
-            self.width,
-            self.height,
-            image::ExtendedColorType::Rgba8,
-        )
-    }
-
     /// The window at (x, y) of size w × h (clamped to the image), each pixel repeated `zoom`
     /// times in both directions (nearest neighbour, so texels and aliasing stay visible).
     pub fn crop_zoom(&self, x: u32, y: u32, w: u32, h: u32, zoom: u32) -> Rgba {

@@ -189,7 +189,10 @@ impl Measurer {
             .render_with(
                 &self.scene,
                 options,
-                shadowlab::gl::FrameRequest { masks: true },
+                shadowlab::gl::FrameRequest {
+                    masks: true,
+                    ..shadowlab::gl::FrameRequest::default()
+                },
             )
             .unwrap_or_else(|e| panic!("{e}"));
         let g = frame.gbuffer.as_ref().unwrap();

@@ -2,6 +2,7 @@
 //! nothing for the next pass to assume.
 
 pub mod base;
+pub mod debug;
 pub mod gbuffer;
 pub mod lit;
 pub mod shadow_map;

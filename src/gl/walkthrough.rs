@@ -1,0 +1,183 @@
+//! What each step of a frame does and which GL state it uses, in words, for the viewer's
+//! walkthrough mode. The wording follows the options in force, so a toggle changes the text.
+
+use crate::frame::{Step, StepKind};
+use crate::options::{
+    CasterFaces, CompareResult, CountingMode, DepthSource, Options, StencilPasses, StencilWrap,
+    VolumeShading,
+};
+
+/// A step explained: a title, what it does, and the GL calls behind it.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Explanation {
+    pub title: String,
+    pub what: String,
+    pub gl_state: String,
+}
+
+fn light_name(step: &Step) -> String {
+    match (step.light, step.face) {
+        (Some(l), Some(f)) => format!("light {l}, view {f}"),
+        (Some(l), None) => format!("light {l}"),
+        _ => String::new(),
+    }
+}
+
+/// Explains `step` under `options`.
+pub fn explain(step: &Step, options: &Options) -> Explanation {
+    let sm = &options.shadow_map;
+    let sv = &options.shadow_volume;
+    let who = light_name(step);
+    match step.kind {
+        StepKind::LightView => Explanation {
+            title: format!("Light view ({who})"),
+            what: format!(
+                "The casters are drawn from the light into a {0}x{0} depth buffer: the shadow map \
+                 stores, per texel, the depth of the nearest {1} the light sees. Brighter is \
+                 nearer.",
+                sm.size,
+                match sm.cull {
+                    CasterFaces::Front => "front face",
+                    CasterFaces::Back => "back face",
+                }
+            ),
+            gl_state: format!(
+                "glColorMask(0,0,0,0); glViewport(0,0,{0},{0}); glEnable(GL_CULL_FACE) keeping {1} \
+                 faces; glPolygonOffset({2}, {3}) x (1 + {4} x light order){5}; depth test \
+                 GL_LESS; target: {6}.",
+                sm.size,
+                match sm.cull {
+                    CasterFaces::Front => "front",
+                    CasterFaces::Back => "back",
+                },
+                sm.offset_factor,
+                sm.offset_units,
+                sm.offset_growth,
+                if sm.offset { "" } else { " (offset off)" },
+                match sm.depth_source {
+                    DepthSource::Copy => "the frame's own depth buffer (copied next)",
+                    DepthSource::Fbo => "an FBO with the depth texture attached",
+                }
+            ),
+        },
+        StepKind::DepthCopy => Explanation {
+            title: format!("Depth copy ({who})"),
+            what: "The depth buffer just drawn is copied into the light's depth texture \
+                   (the paper's way: no render-to-texture on its hardware)."
+                .into(),
+            gl_state: "glBindTexture(GL_TEXTURE_2D, map); glCopyTexSubImage2D(GL_TEXTURE_2D, 0, \
+                       0, 0, 0, 0, size, size); then GL_TEXTURE_COMPARE_MODE = \
+                       GL_COMPARE_REF_TO_TEXTURE, GL_TEXTURE_COMPARE_FUNC = GL_LEQUAL."
+                .into(),
+        },
+        StepKind::Base => Explanation {
+            title: "Unlit world".into(),
+            what: "Every visible surface with its baked light only (lightmaps, vertex light, a \
+                   constant level for models). This pass also lays down the depth that every \
+                   later pass tests against."
+                .into(),
+            gl_state: "glClear(COLOR|DEPTH|STENCIL); depth test GL_LESS, depth writes on; no \
+                       blending; alpha-tested surfaces discard in the shader (glAlphaFunc \
+                       emulated)."
+                .into(),
+        },
+        StepKind::Stencil => Explanation {
+            title: format!("Shadow volumes into the stencil ({who})"),
+            what: format!(
+                "The light's shadow volumes are drawn without colour or depth writes; each \
+                 pixel's stencil ends up counting the volumes it lies in ({}). Non-zero means \
+                 shadowed.",
+                match sv.counting {
+                    CountingMode::Zfail => "depth-fail: faces behind the surface are counted",
+                    CountingMode::Zpass => "depth-pass: faces in front of the surface are counted",
+                    CountingMode::Auto => "each caster depth-pass where safe, else depth-fail",
+                }
+            ),
+            gl_state: format!(
+                "glClear(GL_STENCIL_BUFFER_BIT); glColorMask(0,0,0,0); glDepthMask(0); \
+                 glStencilFunc(GL_ALWAYS, 0, ~0); {}; {} arithmetic; infinite far plane.",
+                match sv.stencil {
+                    StencilPasses::TwoPass =>
+                        "two passes with glCullFace: back faces GL_INCR on depth fail, then \
+                         front faces GL_DECR",
+                    StencilPasses::Separate =>
+                        "one pass with glStencilOpSeparate for front and back faces",
+                },
+                match (sv.wrap, sv.stencil) {
+                    (StencilWrap::Saturate, StencilPasses::TwoPass) => "saturating",
+                    _ => "wrapping",
+                }
+            ),
+        },
+        StepKind::Lit => {
+            let shadow = match options.technique_for(step.light.unwrap_or(0)) {
+                crate::options::Technique::ShadowMap => match sm.result {
+                    CompareResult::Alpha => {
+                        "each fragment is projected into the light's map (texgen emulated in the \
+                         vertex shader); the depth compare's result goes to alpha and the alpha \
+                         test (glAlphaFunc emulated) drops shadowed fragments"
+                    }
+                    CompareResult::Intensity => {
+                        "each fragment is projected into the light's map; the depth compare's \
+                         result scales the light"
+                    }
+                },
+                crate::options::Technique::ShadowVolume => match sv.shading {
+                    VolumeShading::Additive => {
+                        "the stencil test keeps only fragments whose count is zero"
+                    }
+                    VolumeShading::Fill => {
+                        "every fragment is lit; the fill quad darkens the shadowed ones next"
+                    }
+                },
+                crate::options::Technique::None => "no shadow test",
+            };
+            Explanation {
+                title: format!("Lit pass ({who})"),
+                what: format!(
+                    "The light's diffuse contribution is added to the frame where it reaches: {shadow}."
+                ),
+                gl_state: "glBlendFunc(GL_ONE, GL_ONE); depth test GL_LEQUAL against the unlit \
+                           pass's depth, depth writes off."
+                    .into(),
+            }
+        }
+        StepKind::Fill => Explanation {
+            title: format!("Fill quad ({who})"),
+            what: "Bestimt and Freitag's shading: a full-screen quad darkens every pixel whose \
+                   stencil is not zero, and clears it."
+                .into(),
+            gl_state: "glStencilFunc(GL_NOTEQUAL, 0, ~0); glBlendFunc(GL_DST_COLOR, GL_ZERO); \
+                       colour 224/255."
+                .into(),
+        },
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn explanations_follow_the_options() {
+        let step = Step {
+            kind: StepKind::LightView,
+            light: Some(1),
+            face: Some(2),
+        };
+        let mut o = Options::default();
+        let a = explain(&step, &o);
+        assert!(a.title.contains("light 1, view 2"));
+        assert!(a.gl_state.contains("frame's own depth buffer"));
+        o.shadow_map.depth_source = DepthSource::Fbo;
+        assert!(explain(&step, &o).gl_state.contains("FBO"));
+        let stencil = Step {
+            kind: StepKind::Stencil,
+            light: Some(0),
+            face: None,
+        };
+        assert!(explain(&stencil, &o).what.contains("depth-fail"));
+        o.shadow_volume.counting = CountingMode::Zpass;
+        assert!(explain(&stencil, &o).what.contains("depth-pass"));
+    }
+}

@@ -1,0 +1,198 @@
+//! The viewer, driven by scripts under `xvfb-run`: it opens on the built-in scene and on oa_dm1,
+//! switches techniques, shows volumes, walks through a frame, replays a camera path, saves
+//! screenshots and exits with status 0. The screenshots land in `docs/screenshots/` (the
+//! README shows them; those of OpenArena maps are not committed).
+
+mod common;
+
+use image::RgbaImage;
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+fn shots() -> PathBuf {
+    let d = Path::new(env!("CARGO_MANIFEST_DIR")).join("docs/screenshots");
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
+/// Runs `shadowlab view` with `script` under a virtual X server; panics with its output unless
+/// it exits with status 0.
+fn view(scene: Option<&str>, script: &str, name: &str) {
+    let which = Command::new("sh")
+        .args(["-c", "command -v xvfb-run"])
+        .output()
+        .expect("sh runs");
+    assert!(
+        which.status.success(),
+        "xvfb-run is missing: install the Debian packages `xvfb` and `xauth`"
+    );
+    let dir = std::env::temp_dir().join(format!("shadowlab-viewer-{}-{name}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let script_path = dir.join("script.txt");
+    std::fs::write(&script_path, script).unwrap();
+    let mut cmd = Command::new("timeout");
+    cmd.args(["300", "xvfb-run", "-a", "-s", "-screen 0 1280x800x24"])
+        .arg(env!("CARGO_BIN_EXE_shadowlab"))
+        .arg("view")
+        .arg("--script")
+        .arg(&script_path);
+    if let Some(s) = scene {
+        cmd.arg("--scene")
+            .arg(Path::new(env!("CARGO_MANIFEST_DIR")).join(s));
+    }
+    let out = cmd.output().expect("timeout and xvfb-run run");
+    assert!(
+        out.status.success(),
+        "the viewer exited with {:?}\nstdout: {}\nstderr: {}",
+        out.status,
+        String::from_utf8_lossy(&out.stdout),
+        String::from_utf8_lossy(&out.stderr)
+    );
+}
+
+fn load(p: &Path) -> RgbaImage {
+    image::open(p)
+        .unwrap_or_else(|e| panic!("{}: {e}", p.display()))
+        .to_rgba8()
+}
+
+fn luma(p: &image::Rgba<u8>) -> f32 {
+    0.2126 * p[0] as f32 + 0.7152 * p[1] as f32 + 0.0722 * p[2] as f32
+}
+
+/// Pixels where `b` is darker than `a` by more than 8 luma, and where they differ at all.
+fn darker_and_differing(a: &RgbaImage, b: &RgbaImage) -> (usize, usize) {
+    assert_eq!(a.dimensions(), b.dimensions());
+    let mut darker = 0;
+    let mut differing = 0;
+    for (pa, pb) in a.pixels().zip(b.pixels()) {
+        darker += (luma(pa) - luma(pb) > 8.0) as usize;
+        differing += (pa != pb) as usize;
+    }
+    (darker, differing)
+}
+
+#[test]
+fn the_viewer_drives_the_builtin_scene_and_oa_dm1_from_scripts() {
+    let d = shots();
+    let p = |f: &str| d.join(f).display().to_string();
+    view(
+        None,
+        &format!(
+            "wait 2\nframe {}\nscreenshot {}\nset technique=shadow_volume\nwait 2\nframe {}\n\
+             overlay timings on\nwait 3\nscreenshot {}\nwalkthrough 3\nwait 3\nscreenshot {}\n\
+             walkthrough off\nview stencil\nwait 2\nscreenshot {}\nview scene\n\
+             set technique=shadow_map\nwait 2\nframe {}\noverlay texels on\nwait 2\nframe {}\n\
+             overlay texels off\nlight 1 shadow_volume\nwait 2\nframe {}\nview depth\nwait 2\n\
+             screenshot {}\nquit\n",
+            p("builtin-frame-none.png"),
+            p("viewer-builtin.png"),
+            p("builtin-frame-volumes.png"),
+            p("viewer-timings.png"),
+            p("viewer-walkthrough.png"),
+            p("viewer-stencil.png"),
+            p("builtin-frame-maps.png"),
+            p("builtin-frame-texels.png"),
+            p("builtin-frame-mixed.png"),
+            p("viewer-depth.png"),
+        ),
+        "builtin",
+    );
+    // The technique switch darkens the shadowed pixels, and only changes part of the view.
+    let none = load(&d.join("builtin-frame-none.png"));
+    let sv = load(&d.join("builtin-frame-volumes.png"));
+    let (darker, differing) = darker_and_differing(&none, &sv);
+    let total = (none.width() * none.height()) as usize;
+    println!("built-in: shadow volumes darken {darker} of {total} px ({differing} differ)");
+    assert!(darker > total / 50 && differing < total * 3 / 4);
+
+    // The viewer's frame is the headless renderer's frame, pixel for pixel.
+    let (w, h) = sv.dimensions();
+    let headless = std::env::temp_dir().join(format!(
+        "shadowlab-viewer-{}-headless.png",
+        std::process::id()
+    ));
+    let st = Command::new(env!("CARGO_BIN_EXE_shadowlab"))
+        .args(["render", "--set", "technique=shadow_volume", "--size"])
+        .arg(format!("{w}x{h}"))
+        .arg("--out")
+        .arg(&headless)
+        .status()
+        .unwrap();
+    assert!(st.success());
+    let (_, differing) = darker_and_differing(&sv, &load(&headless));
+    assert_eq!(
+        differing, 0,
+        "the viewer's frame differs from `render` in {differing} px"
+    );
+
+    // The walkthrough's third step, the stencil view and the depth view show something else
+    // than the scene.
+    let scene = load(&d.join("viewer-timings.png"));
+    for f in [
+        "viewer-walkthrough.png",
+        "viewer-stencil.png",
+        "viewer-depth.png",
+    ] {
+        let (_, differing) = darker_and_differing(&scene, &load(&d.join(f)));
+        assert!(differing > total / 10, "{f}: {differing}");
+    }
+    // The texel grid darkens lines on lit receivers; a per-light technique mixes both.
+    let maps = load(&d.join("builtin-frame-maps.png"));
+    let (grid_darker, _) = darker_and_differing(&maps, &load(&d.join("builtin-frame-texels.png")));
+    println!("built-in: the texel grid darkens {grid_darker} px");
+    assert!(grid_darker > total / 100);
+    let mixed = load(&d.join("builtin-frame-mixed.png"));
+    let (_, from_maps) = darker_and_differing(&maps, &mixed);
+    let (_, from_volumes) = darker_and_differing(&sv, &mixed);
+    println!(
+        "built-in: light 1 by volumes changes {from_maps} px against maps, {from_volumes} against all volumes"
+    );
+    assert!(from_maps > 0 && from_volumes > 0);
+
+    // oa_dm1: a replayed path, a technique switch, volumes shown.
+    common::openarena_data();
+    let path =
+        std::env::temp_dir().join(format!("shadowlab-viewer-{}-path.txt", std::process::id()));
+    let (scene, _, _) = common::load_scene_file("oa_dm1");
+    let c = scene.camera;
+    let poses: String = (0..6)
+        .map(|i| {
+            format!(
+                "{} {} {} {} {}\n",
+                c.position.x + 4.0 * i as f32,
+                c.position.y,
+                c.position.z,
+                c.yaw_deg + 2.0 * i as f32,
+                c.pitch_deg - 10.0
+            )
+        })
+        .collect();
+    std::fs::write(&path, poses).unwrap();
+    view(
+        Some("assets/scenes/oa_dm1.toml"),
+        &format!(
+            "replay {}\nset technique=shadow_map\nwait 2\nframe {}\nset technique=shadow_volume\n\
+             wait 2\nframe {}\noverlay volumes on\noverlay silhouettes on\nwait 3\nframe {}\n\
+             screenshot {}\nquit\n",
+            path.display(),
+            p("oa_dm1-frame-maps.png"),
+            p("oa_dm1-frame-volumes.png"),
+            p("oa_dm1-frame-volumes-shown.png"),
+            p("oa_dm1-viewer-volumes.png"),
+        ),
+        "oa_dm1",
+    );
+    let sm = load(&d.join("oa_dm1-frame-maps.png"));
+    let sv = load(&d.join("oa_dm1-frame-volumes.png"));
+    let shown = load(&d.join("oa_dm1-frame-volumes-shown.png"));
+    let total = (sm.width() * sm.height()) as usize;
+    let (_, technique_px) = darker_and_differing(&sm, &sv);
+    let (_, overlay_px) = darker_and_differing(&sv, &shown);
+    println!(
+        "oa_dm1: maps against volumes differ in {technique_px} px, the overlay changes {overlay_px} of {total}"
+    );
+    // Both techniques shadow nearly the same pixels; the translucent volumes tint a large part.
+    assert!(technique_px > 0 && technique_px < total / 5);
+    assert!(overlay_px > total / 10);
+}
