@@ -20,7 +20,11 @@ uniform float u_cos_inner;    // where the cone edge starts to soften
 uniform float u_radius;
 
 #ifdef SHADOW_MAP
+#ifdef SIX_SPOTS
+in vec4 v_shadows[6];
+#else
 in vec4 v_shadow;
+#endif
 uniform int u_face;           // six-spot omni light: the cube face this pass lights; -1: all
 uniform int u_sm_alpha_func;  // glAlphaFunc emulation: 0 NEVER .. 7 ALWAYS (options AlphaTestFunc)
 uniform float u_sm_alpha_ref;
@@ -55,6 +59,10 @@ uniform int u_mask_value;
 out vec4 o_color;
 
 void main() {
+#ifdef SHADOW_MAP
+    // One of an omni light's six spots: fragments of the other faces leave before any work.
+    if (u_face >= 0 && major_face(v_world - u_light_pos) != u_face) discard;
+#endif
     vec4 albedo = texture(u_texture, v_uv);
     if (!q3_alpha_passes(u_alpha_func, albedo.a)) discard;
     // Two-sided surfaces are lit on the side the camera sees.
@@ -73,9 +81,11 @@ void main() {
     // Fraction of the light that reaches the fragment (1 without a shadow technique).
     float visibility = 1.0;
 #ifdef SHADOW_MAP
-    if (u_face >= 0 && major_face(v_world - u_light_pos) != u_face) discard;
 #ifdef SHADOW_CUBE
     visibility = shadow_visibility_cube(v_world - u_light_pos);
+#elif defined(SIX_SPOTS)
+    g_face = major_face(v_world - u_light_pos);
+    visibility = shadow_visibility(v_shadows[g_face]);
 #else
     visibility = shadow_visibility(v_shadow);
 #endif
@@ -108,6 +118,8 @@ void main() {
     vec3 a = abs(d);
     vec2 face_uv = (a.x >= a.y && a.x >= a.z) ? d.yz / a.x : ((a.y >= a.z) ? d.xz / a.y : d.xy / a.z);
     vec2 texel = (face_uv * 0.5 + 0.5) * u_map_size;
+#elif defined(SIX_SPOTS)
+    vec2 texel = v_shadows[g_face].xy / v_shadows[g_face].w * u_map_size;
 #else
     vec2 texel = v_shadow.xy / v_shadow.w * u_map_size;
 #endif

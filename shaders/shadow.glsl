@@ -1,7 +1,9 @@
 // Shadow-map lookups for the lit pass (included only with SHADOW_MAP).
 //
-// Defines: SHADOW_CUBE (one cube map), COMPARE_SHADER (fetch and compare here instead of
-// sampler2DShadow), FILTER_HW2X2 / FILTER_PCF3 / FILTER_PCFN (default: nearest),
+// Defines: SHADOW_CUBE (one cube map), SIX_SPOTS (an omni light's six spot maps in one pass: the
+// fragment's face picks its map, as the six passes' face test would), COMPARE_SHADER (fetch and
+// compare here instead of sampler2DShadow), FILTER_HW2X2 / FILTER_PCF3 / FILTER_PCFN (default:
+// nearest),
 // OUTSIDE_RANGE (no compare outside [0,1]), REF_CLAMP (fixed-point depth: the reference is
 // clamped to [0,1] before the compare, as GL does).
 
@@ -17,9 +19,27 @@ uniform samplerCubeShadow u_shadow_cube;
 uniform vec2 u_cube_near_far;
 #else
 #ifdef COMPARE_SHADER
-uniform sampler2D u_shadow_map;
+#define MAP_SAMPLER sampler2D
 #else
-uniform sampler2DShadow u_shadow_map;
+#define MAP_SAMPLER sampler2DShadow
+#endif
+#ifdef SIX_SPOTS
+// GLSL 3.30 indexes sampler arrays with constants only: the face is chosen by branches.
+uniform MAP_SAMPLER u_face_maps[6];
+int g_face = 0;
+#define MAP_PICK(E0, E1, E2, E3, E4, E5) (g_face == 0 ? E0 : g_face == 1 ? E1 : g_face == 2 ? E2 : g_face == 3 ? E3 : g_face == 4 ? E4 : E5)
+#define MAP_CALL1(F, A) MAP_PICK(F(u_face_maps[0], A), F(u_face_maps[1], A), F(u_face_maps[2], A), F(u_face_maps[3], A), F(u_face_maps[4], A), F(u_face_maps[5], A))
+#define MAP_CALL2(F, A, B) MAP_PICK(F(u_face_maps[0], A, B), F(u_face_maps[1], A, B), F(u_face_maps[2], A, B), F(u_face_maps[3], A, B), F(u_face_maps[4], A, B), F(u_face_maps[5], A, B))
+#else
+uniform MAP_SAMPLER u_shadow_map;
+#define MAP_CALL1(F, A) F(u_shadow_map, A)
+#define MAP_CALL2(F, A, B) F(u_shadow_map, A, B)
+#endif
+#ifdef COMPARE_SHADER
+float map_depth(vec2 uv) { return MAP_CALL1(texture, uv).r; }
+float map_texel(ivec2 t) { return MAP_CALL2(texelFetch, t, 0).r; }
+#else
+float map_compare(vec3 c) { return MAP_CALL1(texture, c); }
 #endif
 #endif
 
@@ -35,9 +55,9 @@ float reference_depth(float r) {
 // One compare at uv: 1 if the fragment is no farther than the stored depth (LEQUAL).
 float compare_at(vec2 uv, float ref) {
 #ifdef COMPARE_SHADER
-    return reference_depth(ref) <= texture(u_shadow_map, uv).r ? 1.0 : 0.0;
+    return reference_depth(ref) <= map_depth(uv) ? 1.0 : 0.0;
 #else
-    return texture(u_shadow_map, vec3(uv, ref));
+    return map_compare(vec3(uv, ref));
 #endif
 }
 
@@ -49,10 +69,10 @@ float compare_bilinear(vec2 uv, float ref) {
     ivec2 i0 = ivec2(floor(t));
     ivec2 last = ivec2(int(u_map_size) - 1);
     float r = reference_depth(ref);
-    float c00 = r <= texelFetch(u_shadow_map, clamp(i0, ivec2(0), last), 0).r ? 1.0 : 0.0;
-    float c10 = r <= texelFetch(u_shadow_map, clamp(i0 + ivec2(1, 0), ivec2(0), last), 0).r ? 1.0 : 0.0;
-    float c01 = r <= texelFetch(u_shadow_map, clamp(i0 + ivec2(0, 1), ivec2(0), last), 0).r ? 1.0 : 0.0;
-    float c11 = r <= texelFetch(u_shadow_map, clamp(i0 + ivec2(1, 1), ivec2(0), last), 0).r ? 1.0 : 0.0;
+    float c00 = r <= map_texel(clamp(i0, ivec2(0), last)) ? 1.0 : 0.0;
+    float c10 = r <= map_texel(clamp(i0 + ivec2(1, 0), ivec2(0), last)) ? 1.0 : 0.0;
+    float c01 = r <= map_texel(clamp(i0 + ivec2(0, 1), ivec2(0), last)) ? 1.0 : 0.0;
+    float c11 = r <= map_texel(clamp(i0 + ivec2(1, 1), ivec2(0), last)) ? 1.0 : 0.0;
     return mix(mix(c00, c10, f.x), mix(c01, c11, f.x), f.y);
 }
 #endif

@@ -22,8 +22,14 @@ out vec3 v_color;
 // glTexGen(EYE_LINEAR) with planes T = B * P_light * V_light * inverse(V_camera), specified while
 // the camera's modelview is loaded: applied to eye coordinates it gives (s, t, r, q).
 uniform mat4 u_view;    // world -> camera eye
+#ifdef SIX_SPOTS
+// An omni light's six spot views at once, each computed exactly as its own pass would.
+uniform mat4 u_texgens[6];
+out vec4 v_shadows[6];
+#else
 uniform mat4 u_texgen;
 out vec4 v_shadow;
+#endif
 #endif
 
 #ifdef CLIP_PLANES
@@ -41,7 +47,11 @@ void main() {
     v_lightmap_uv = a_lightmap_uv;
     v_color = a_color.rgb;
 #ifdef SHADOW_MAP
+#ifdef SIX_SPOTS
+    for (int f = 0; f < 6; f++) v_shadows[f] = u_texgens[f] * (u_view * world);
+#else
     v_shadow = u_texgen * (u_view * world);
+#endif
 #endif
 #ifdef CLIP_PLANES
     for (int i = 0; i < 4; i++) gl_ClipDistance[i] = dot(u_clip_planes[i], world);

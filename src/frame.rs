@@ -49,6 +49,17 @@ pub struct Step {
     pub light: Option<usize>,
     /// The shadow-map view (spot, six-spot face) or cube face, for light views and copies.
     pub face: Option<usize>,
+    /// The technique the light's step runs under (resolved: never `auto`).
+    pub technique: Option<crate::options::Technique>,
+}
+
+/// What the frame reused from earlier frames.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize)]
+pub struct CacheStats {
+    pub maps_rendered: usize,
+    pub maps_reused: usize,
+    pub volume_parts_built: usize,
+    pub volume_parts_reused: usize,
 }
 
 /// A light's stencil counts after its volume pass (row-major, top row first).
@@ -172,8 +183,11 @@ pub struct Frame {
     pub step_image: Option<Rgba>,
     /// A light's stencil counts, when the request asked for them.
     pub stencil: Option<StencilImage>,
-    /// What the plan decided (visible surfaces, triangles, BSP culling).
+    /// What the plan decided (visible surfaces, triangles, BSP culling, lights and casters
+    /// culled, scissor, counting, auto choices).
     pub plan_stats: crate::plan::PlanStats,
+    /// Shadow maps and volume parts drawn afresh or reused.
+    pub cache: CacheStats,
 }
 
 impl Frame {

@@ -333,6 +333,9 @@ option_enum! {
         ShadowMap = "shadow_map",
         /// Stenciled shadow volumes (paper section 4).
         ShadowVolume = "shadow_volume",
+        /// Per light, the cheaper of the two whose estimated error meets `accuracy` (thesis
+        /// chapter 7: pick the algorithm for the case); the planner says why.
+        Auto = "auto",
     }
 }
 
@@ -557,6 +560,38 @@ define_options! {
         height: u32 = 480, in 16 ..= 16384;
         /// GL context path: auto tries egl, then osmesa.
         backend: BackendChoice = BackendChoice::Auto;
+        /// For `technique = auto`: the share of a light's receiver pixels, in percent, its
+        /// technique may be expected to get wrong (see `plan::auto` for the estimates).
+        accuracy: f32 = 0.5, in 0.0 ..= 100.0;
+    }
+
+    /// The frame planner (beyond the paper, whose section 4.2 leaves this speed on the table:
+    /// it culls no light and no caster). Every decision is conservative (the masks equal those
+    /// with the planner off) and has its own switch so that its effect can be measured; the
+    /// paper's frame is `plan.enabled = false`.
+    group plan: PlanOptions {
+        /// Master switch for every decision below.
+        enabled: bool = true;
+        /// Skip lights whose range misses the view frustum or every visible BSP leaf, and give
+        /// no shadow work to a light with no caster in range.
+        cull_lights: bool = true;
+        /// Per light, draw only visible receivers within its range (and, for an omni light's
+        /// six spots, within each face's pyramid).
+        cull_receivers: bool = true;
+        /// Skip casters outside a light's range; outside a map's frustum (shadow maps); whose
+        /// shadow cannot reach the view (shadow volumes, after Forsyth).
+        cull_casters: bool = true;
+        /// Scissor each light's stencil and lit passes to its range's screen rectangle.
+        scissor: bool = true;
+        /// Under `shadow_volume.counting = zfail`, count depth-pass, without caps, each caster
+        /// piece whose shadow cannot hold the camera (Doom 3's test) and that is not
+        /// alpha-tested, depth-fail the others (as `counting = auto`; `zpass` stays `zpass`).
+        counting: bool = true;
+        /// Reuse a shadow map while its light, view and casters stay as they were.
+        cache_maps: bool = true;
+        /// Light an omni light's six spot maps in one pass, each fragment reading its face's
+        /// map (the paper draws six passes; not with `shadow_map.outside = clip_planes`).
+        merge_faces: bool = true;
     }
 
     /// Lights and the unshadowed lighting model.
@@ -877,7 +912,7 @@ mod tests {
         assert_eq!(
             kind("technique"),
             OptionKind::Choice {
-                choices: vec!["none", "shadow_map", "shadow_volume"]
+                choices: vec!["none", "shadow_map", "shadow_volume", "auto"]
             }
         );
         assert_eq!(

@@ -5,6 +5,7 @@ use anyhow::{Context, Result};
 use glam::Vec3;
 use shadowlab::frame::Frame;
 use shadowlab::gl::FrameRequest;
+use shadowlab::options::Technique;
 use shadowlab::scene::Scene;
 use shadowlab::truth::{self, Counts, Reference, Tracing, reference};
 use std::path::{Path, PathBuf};
@@ -87,6 +88,9 @@ pub struct Args {
     /// exact reference say and which triangle blocks the shadow ray.
     #[arg(long, value_name = "X,Y")]
     probe: Vec<String>,
+    /// Print what the planner decided and what the frame reused (JSON on stdout).
+    #[arg(long)]
+    stats: bool,
 }
 
 fn parse_probe(s: &str) -> Result<(u32, u32)> {
@@ -175,6 +179,12 @@ pub fn run(common: &CommonArgs, args: &Args) -> Result<()> {
         masks: args.mask.is_some() || !probes.is_empty(),
         ..FrameRequest::default()
     };
+    if options.uses(scene.lights.len(), Technique::Auto) {
+        // `auto` picks from measured costs: measure before the frame that is kept.
+        for _ in 0..shadowlab::plan::auto::LEARNING_FRAMES {
+            renderer.render_with(&scene, &options, FrameRequest::default())?;
+        }
+    }
     let frame = renderer.render_with(&scene, &options, request)?;
     if let Some(window) = ctx.window() {
         // Show the frame too, proving the window path presents what it rendered.
@@ -190,6 +200,17 @@ pub fn run(common: &CommonArgs, args: &Args) -> Result<()> {
     }
     for &p in &probes {
         probe(&scene, &frame, p)?;
+    }
+    if args.stats {
+        let volumes: Vec<_> = frame.volumes.iter().collect();
+        println!(
+            "{}",
+            serde_json::to_string_pretty(&serde_json::json!({
+                "plan": frame.plan_stats,
+                "cache": frame.cache,
+                "volumes": volumes,
+            }))?
+        );
     }
     // Per-light passes are summed so that 64 lights still give one readable line.
     let mut totals: Vec<(String, f64, usize)> = Vec::new();

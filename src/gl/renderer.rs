@@ -17,11 +17,14 @@ use super::target::{Framebuffer, GBufferTarget, MaskTarget};
 use super::timing::PassTimer;
 use super::upload::GpuScene;
 use super::volumes::{VolumeCache, VolumeStats};
+use crate::frame::CacheStats;
 use crate::frame::{Frame, GBuffer, Mask, Rgba, StencilImage, Step, StepKind};
 use crate::options::{
     Compare, CompareResult, DepthBits, Filter, Options, Outside, StencilPasses, StencilWrap,
     Technique, VolumeShading,
 };
+use crate::plan::auto::CostMemory;
+use crate::plan::scissor::Scissor;
 use crate::plan::{LightPlan, Plan};
 use crate::scene::{Camera, Scene};
 use crate::shadow::projection::cube_face_view;
@@ -56,6 +59,9 @@ pub struct FrameRequest {
     pub stencil_of: Option<usize>,
     /// Debug drawing over the finished frame (untimed).
     pub overlays: Overlays,
+    /// Time the frame only, not each pass, where per-pass times need glFinish between passes
+    /// (no timer queries, e.g. llvmpipe): benchmarks take frame times this way.
+    pub frame_only: bool,
 }
 
 /// Debug drawing over a frame.
@@ -79,8 +85,13 @@ struct Stepper {
 
 impl Stepper {
     /// Records a step; true when it is the one to stop after.
-    fn record(&mut self, kind: StepKind, light: Option<usize>, face: Option<usize>) -> bool {
-        self.steps.push(Step { kind, light, face });
+    fn record(&mut self, kind: StepKind, lp: Option<&LightPlan>, face: Option<usize>) -> bool {
+        self.steps.push(Step {
+            kind,
+            light: lp.map(|l| l.light),
+            face,
+            technique: lp.map(|l| l.technique),
+        });
         self.stop == Some(self.steps.len() - 1)
     }
 }
@@ -97,15 +108,18 @@ struct LastMap {
 
 /// The `#define`s of the lit program for these options: with a shadow-map lookup (`shadow_map`,
 /// from a cube map when `cube`) or without, writing light or the mask.
-fn lit_defines(
-    options: &Options,
-    shadow_map: bool,
-    cube: bool,
-    mask: bool,
-    texel_grid: bool,
-) -> Vec<&'static str> {
+fn lit_defines(options: &Options, v: LitVariant, texel_grid: bool) -> Vec<&'static str> {
+    let LitVariant {
+        shadow_map,
+        cube,
+        six,
+        mask,
+    } = v;
     let mut d = Vec::new();
     if shadow_map {
+        if six {
+            d.push("SIX_SPOTS");
+        }
         if texel_grid && !mask {
             d.push("TEXEL_GRID");
         }
@@ -139,6 +153,19 @@ fn lit_defines(
         d.push("MASK_OUTPUT");
     }
     d
+}
+
+/// Which lit program a pass needs.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+struct LitVariant {
+    /// With a shadow-map lookup...
+    shadow_map: bool,
+    /// ...into one cube map...
+    cube: bool,
+    /// ...or into an omni light's six spot maps at once.
+    six: bool,
+    /// Writing the decision mask instead of light.
+    mask: bool,
 }
 
 /// Bestimt and Freitag's fill colour (their 0x00E0E0E0 with DESTCOLOR blending).
@@ -252,6 +279,8 @@ pub struct Renderer {
     empty_vao: glow::VertexArray,
     /// The shadow-map views of the last frame, for the depth-map debug view.
     last_maps: Vec<LastMap>,
+    /// Each light's measured cost per technique, for `technique = auto`.
+    costs: CostMemory,
 }
 
 /// One shadow-mapped view's texture, by light plan and view index.
@@ -282,6 +311,7 @@ impl Renderer {
             measure_targets: None,
             empty_vao,
             last_maps: Vec::new(),
+            costs: CostMemory::default(),
         })
     }
 
@@ -307,6 +337,10 @@ impl Renderer {
         let gpu = GpuScene::new(&self.gl, scene, self.caps.max_texture_size.max(1) as u32)
             .map_err(RenderError::Gl)?;
         self.gpu = Some(gpu);
+        // Cached maps and volumes belong to the old scene.
+        self.shadow_maps.forget();
+        self.volumes.delete(&self.gl);
+        self.costs = CostMemory::default();
         Ok(())
     }
 
@@ -360,8 +394,21 @@ impl Renderer {
         options: &Options,
         request: FrameRequest,
     ) -> Result<Frame, RenderError> {
-        let plan = Plan::build_at(scene, camera, options);
-        self.execute(scene, &plan, options, request)
+        let plan = Plan::build_with(scene, camera, options, &self.costs);
+        let frame_only = request.frame_only;
+        let frame = self.execute(scene, &plan, options, request)?;
+        // Frame-only timing has no per-light passes to learn from.
+        if !frame_only {
+            let ran: Vec<(usize, Technique)> =
+                plan.lights.iter().map(|l| (l.light, l.technique)).collect();
+            self.costs.record(&frame.passes, &ran);
+        }
+        Ok(frame)
+    }
+
+    /// What `technique = auto` has measured so far.
+    pub fn costs(&self) -> &CostMemory {
+        &self.costs
     }
 
     fn check_support(&self, options: &Options, plan: &Plan) -> Result<(), RenderError> {
@@ -431,19 +478,32 @@ impl Renderer {
         // Compile what this frame needs before borrowing the programs for the passes.
         let gl_arc = self.gl.clone();
         let gl: &glow::Context = &gl_arc;
-        let mut variants: HashMap<(bool, bool, bool), String> = HashMap::new();
-        for (sm, cube) in [(false, false), (true, false), (true, true)] {
+        let mut variants: HashMap<LitVariant, String> = HashMap::new();
+        for (shadow_map, cube, six) in [
+            (false, false, false),
+            (true, false, false),
+            (true, true, false),
+            (true, false, true),
+        ] {
             for mask in [false, true] {
-                if (sm && !shadow_mapped) || (mask && !request.masks) {
+                if (shadow_map && !shadow_mapped) || (mask && !request.masks) {
                     continue;
                 }
-                let defines = lit_defines(options, sm, cube, mask, request.overlays.texel_grid);
+                let v = LitVariant {
+                    shadow_map,
+                    cube,
+                    six,
+                    mask,
+                };
+                let defines = lit_defines(options, v, request.overlays.texel_grid);
                 let key = self.programs.lit_variant(gl, &defines)?;
-                variants.insert((sm, cube, mask), key);
+                variants.insert(v, key);
             }
         }
 
+        self.timer.start_frame(!request.frame_only);
         let start = Instant::now();
+        let mut cache = CacheStats::default();
         let mut stepper = Stepper {
             stop: request.stop_after,
             steps: Vec::new(),
@@ -486,10 +546,12 @@ impl Renderer {
             }
             for (vi, view) in lp.views.iter().enumerate() {
                 let cube = view.kind == ViewKind::Cube;
-                let texture = self
+                let (texture, holds) = self
                     .shadow_maps
-                    .slot(gl, maps.len(), cube, sm.size, sm.depth_bits)
+                    .slot(gl, lp.light, vi, cube, sm.size, sm.depth_bits)
                     .map_err(RenderError::Gl)?;
+                let key = lp.view_keys.get(vi).copied().flatten();
+                let casters = lp.view_casters.get(vi).map(Vec::as_slice);
                 let faces: Vec<(Option<usize>, glam::Mat4)> = if cube {
                     let eye = scene.lights[lp.light].position;
                     (0..6)
@@ -497,6 +559,16 @@ impl Renderer {
                         .collect()
                 } else {
                     vec![(None, view.view_proj())]
+                };
+                if key.is_some() && holds == key {
+                    cache.maps_reused += 1;
+                } else {
+                    cache.maps_rendered += 1;
+                }
+                let faces = if key.is_some() && holds == key {
+                    Vec::new()
+                } else {
+                    faces
                 };
                 for (face, view_proj) in faces {
                     let shown = face.or(Some(vi));
@@ -512,13 +584,16 @@ impl Renderer {
                     passes::shadow_map::render(
                         &ctx,
                         &self.programs.depth,
-                        &view_proj,
-                        sm.size,
+                        &passes::shadow_map::MapView {
+                            view_proj,
+                            size: sm.size,
+                            cube_face: face,
+                            order: lp.order,
+                            casters,
+                        },
                         &target,
-                        face,
-                        lp.order,
                     );
-                    if stepper.record(StepKind::LightView, Some(lp.light), shown) {
+                    if stepper.record(StepKind::LightView, Some(lp), shown) {
                         let depth = if copy {
                             debug::read_depth(gl, self.target.fbo, sm.size, sm.size)
                         } else {
@@ -531,13 +606,14 @@ impl Renderer {
                         self.timer
                             .begin(gl, format!("light{}.depth_copy", lp.light));
                         copy_depth(gl, &self.target, texture, sm.size, face);
-                        if stepper.record(StepKind::DepthCopy, Some(lp.light), shown) {
+                        if stepper.record(StepKind::DepthCopy, Some(lp), shown) {
                             let depth = debug::read_depth_texture(gl, texture, face, sm.size);
                             let image = debug::depth_image(&depth, sm.size, sm.size);
                             return self.stopped(gl, plan, stepper, image, Vec::new(), start);
                         }
                     }
                 }
+                self.shadow_maps.set_content(lp.light, vi, key);
                 ShadowMaps::configure(gl, texture, cube, sm.compare, sm.filter);
                 self.last_maps.push(LastMap {
                     light: lp.light,
@@ -572,6 +648,8 @@ impl Renderer {
             };
             self.timer
                 .record_cpu(format!("light{}.volume_build", lp.light), build_ms);
+            cache.volume_parts_built += v.stats.parts_built;
+            cache.volume_parts_reused += v.stats.parts_reused;
             volume_stats.push(v.stats);
         }
 
@@ -583,31 +661,46 @@ impl Renderer {
             return self.stopped(gl, plan, stepper, image, volume_stats, start);
         }
         let mut stencil_image = None;
-        let lit_program =
-            |sm: bool, cube: bool, mask: bool| &self.programs.lit[&variants[&(sm, cube, mask)]];
-        let bindings = |pi: usize| -> Vec<(bool, ShadowBinding)> {
+        let lit_program = |shadow_map: bool, cube: bool, six: bool, mask: bool| {
+            &self.programs.lit[&variants[&LitVariant {
+                shadow_map,
+                cube,
+                six,
+                mask,
+            }]]
+        };
+        let bindings = |pi: usize| -> Vec<(bool, ShadowBinding, &[u32], Option<Scissor>)> {
+            let lp = &plan.lights[pi];
             maps.iter()
                 .filter(|m| m.plan_index == pi)
                 .map(|m| {
-                    let view = &plan.lights[pi].views[m.view_index];
+                    let view = &lp.views[m.view_index];
+                    let receivers = lp
+                        .view_receivers
+                        .get(m.view_index)
+                        .map_or(lp.receivers.as_slice(), Vec::as_slice);
+                    let rect = lp.view_scissors.get(m.view_index).copied().flatten();
                     (
                         view.kind == ViewKind::Cube,
                         ShadowBinding {
                             view,
                             texture: m.texture,
                         },
+                        receivers,
+                        rect.or(lp.scissor),
                     )
                 })
                 .collect()
         };
         let fill = options.shadow_volume.shading == VolumeShading::Fill;
         for (pi, lp) in plan.lights.iter().enumerate() {
+            set_scissor(gl, lp.scissor);
             match (lp.technique, self.volumes.get(lp.light)) {
                 (Technique::ShadowVolume, Some(v)) => {
                     self.timer.begin(gl, format!("light{}.stencil", lp.light));
                     passes::stencil::draw(&ctx, &self.programs.volume, v);
                     let wants_stencil = request.stencil_of == Some(lp.light);
-                    let stop = stepper.record(StepKind::Stencil, Some(lp.light), None);
+                    let stop = stepper.record(StepKind::Stencil, Some(lp), None);
                     if wants_stencil || stop {
                         let (w, h) = (self.target.width, self.target.height);
                         let values = debug::read_stencil(gl, self.target.fbo, w, h);
@@ -628,18 +721,19 @@ impl Renderer {
                     self.timer.begin(gl, format!("light{}.lit", lp.light));
                     passes::lit::draw(
                         &ctx,
-                        lit_program(false, false, false),
+                        lit_program(false, false, false, false),
                         lp,
                         &LitShadow::Stencil { test: !fill },
+                        &lp.receivers,
                     );
-                    if stepper.record(StepKind::Lit, Some(lp.light), None) {
+                    if stepper.record(StepKind::Lit, Some(lp), None) {
                         let image = self.color_image(gl);
                         return self.stopped(gl, plan, stepper, image, volume_stats, start);
                     }
                     if fill {
                         self.timer.begin(gl, format!("light{}.fill", lp.light));
                         passes::stencil::fill(gl, &self.programs.fill, self.empty_vao, FILL_SHADE);
-                        if stepper.record(StepKind::Fill, Some(lp.light), None) {
+                        if stepper.record(StepKind::Fill, Some(lp), None) {
                             let image = self.color_image(gl);
                             return self.stopped(gl, plan, stepper, image, volume_stats, start);
                         }
@@ -651,16 +745,17 @@ impl Renderer {
                         &ctx,
                         lp,
                         &bindings(pi),
-                        |sm, cube| lit_program(sm, cube, false),
+                        |sm, cube, six| lit_program(sm, cube, six, false),
                         false,
                     );
-                    if stepper.record(StepKind::Lit, Some(lp.light), None) {
+                    if stepper.record(StepKind::Lit, Some(lp), None) {
                         let image = self.color_image(gl);
                         return self.stopped(gl, plan, stepper, image, volume_stats, start);
                     }
                 }
             }
         }
+        set_scissor(gl, None);
         let passes = self.timer.finish(gl);
         // SAFETY: waits for the frame; no state change.
         unsafe { gl.finish() };
@@ -698,33 +793,37 @@ impl Renderer {
                 gtarget_bind(gl, gtarget);
                 passes::gbuffer::draw(&ctx, &self.programs.gbuffer);
                 let gbuffer = read_gbuffer(gl, gtarget);
-                let mut masks = Vec::with_capacity(plan.lights.len());
+                let mut masks = Vec::with_capacity(plan.lights.len() + plan.culled.len());
                 for (pi, lp) in plan.lights.iter().enumerate() {
                     mtarget.bind(gl);
+                    set_scissor(gl, None);
                     // SAFETY: clears the mask to "not a receiver"; depth and stencil untouched.
                     unsafe {
                         gl.color_mask(true, true, true, true);
                         gl.clear_color(0.0, 0.0, 0.0, 0.0);
                         gl.clear(glow::COLOR_BUFFER_BIT);
                     }
+                    set_scissor(gl, lp.scissor);
                     match (lp.technique, self.volumes.get(lp.light)) {
                         (Technique::ShadowVolume, Some(v)) => {
                             passes::stencil::draw(&ctx, &self.programs.volume, v);
                             passes::lit::draw_mask(
                                 &ctx,
-                                lit_program(false, false, true),
+                                lit_program(false, false, false, true),
                                 lp,
                                 &LitShadow::Stencil { test: true },
+                                &lp.receivers,
                             );
                         }
                         _ => draw_maps(
                             &ctx,
                             lp,
                             &bindings(pi),
-                            |sm, cube| lit_program(sm, cube, true),
+                            |sm, cube, six| lit_program(sm, cube, six, true),
                             true,
                         ),
                     }
+                    set_scissor(gl, None);
                     masks.push(Mask {
                         light: lp.light,
                         width: mtarget.width,
@@ -732,6 +831,16 @@ impl Renderer {
                         values: mtarget.read(gl),
                     });
                 }
+                // Culled lights reach no pixel in view.
+                for &light in &plan.culled {
+                    masks.push(Mask {
+                        light,
+                        width: mtarget.width,
+                        height: mtarget.height,
+                        values: vec![0; (mtarget.width * mtarget.height) as usize],
+                    });
+                }
+                masks.sort_by_key(|m| m.light);
                 (Some(gbuffer), masks)
             }
             _ => (None, Vec::new()),
@@ -750,6 +859,7 @@ impl Renderer {
             step_image: None,
             stencil: stencil_image,
             plan_stats: plan.stats.clone(),
+            cache,
         })
     }
 
@@ -789,6 +899,7 @@ impl Renderer {
             step_image: Some(image),
             stencil: None,
             plan_stats: plan.stats.clone(),
+            cache: CacheStats::default(),
         })
     }
 
@@ -848,22 +959,51 @@ impl Renderer {
 fn draw_maps<'p>(
     ctx: &PassContext,
     lp: &LightPlan,
-    bindings: &[(bool, ShadowBinding)],
-    program: impl Fn(bool, bool) -> &'p Program,
+    bindings: &[(bool, ShadowBinding, &[u32], Option<Scissor>)],
+    program: impl Fn(bool, bool, bool) -> &'p Program,
     mask: bool,
 ) {
-    let pass = |p: &Program, s: &LitShadow| {
+    let pass = |p: &Program, s: &LitShadow, receivers: &[u32]| {
         if mask {
-            passes::lit::draw_mask(ctx, p, lp, s);
+            passes::lit::draw_mask(ctx, p, lp, s, receivers);
         } else {
-            passes::lit::draw(ctx, p, lp, s);
+            passes::lit::draw(ctx, p, lp, s, receivers);
         }
     };
     if bindings.is_empty() {
-        pass(program(false, false), &LitShadow::None);
+        pass(
+            program(false, false, false),
+            &LitShadow::None,
+            &lp.receivers,
+        );
     }
-    for (cube, b) in bindings {
-        pass(program(true, *cube), &LitShadow::Map(b));
+    if lp.merged && bindings.len() == 6 {
+        let maps: Vec<&ShadowBinding> = bindings.iter().map(|(_, b, _, _)| b).collect();
+        pass(
+            program(true, false, true),
+            &LitShadow::Faces(&maps),
+            &lp.receivers,
+        );
+        return;
+    }
+    for (cube, b, receivers, rect) in bindings {
+        set_scissor(ctx.gl, *rect);
+        pass(program(true, *cube, false), &LitShadow::Map(b), receivers);
+    }
+    set_scissor(ctx.gl, lp.scissor);
+}
+
+/// glScissor to a light's rectangle, or off.
+fn set_scissor(gl: &glow::Context, s: Option<Scissor>) {
+    // SAFETY: fixed-function state only.
+    unsafe {
+        match s {
+            Some(s) => {
+                gl.enable(glow::SCISSOR_TEST);
+                gl.scissor(s.x, s.y, s.width, s.height);
+            }
+            None => gl.disable(glow::SCISSOR_TEST),
+        }
     }
 }
 

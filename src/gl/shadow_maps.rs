@@ -1,5 +1,6 @@
-//! Depth textures of shadow mapping, one per shadow view, kept across frames and reallocated only
-//! when their kind, size or precision change (so long runs create no GL objects).
+//! Depth textures of shadow mapping, one per light and view, kept across frames and reallocated
+//! only when their kind, size or precision change (so long runs create no GL objects). Each
+//! remembers what it was drawn from, so that the planner's cache can reuse it.
 
 use crate::options::{Compare, DepthBits, Filter};
 use glow::HasContext;
@@ -14,12 +15,14 @@ struct MapKey {
 struct Slot {
     texture: glow::Texture,
     key: MapKey,
+    /// The plan's key of what the texture holds (None: nothing reusable).
+    content: Option<u64>,
 }
 
 /// The depth textures and the framebuffer used to render into them (the FBO path).
 #[derive(Default)]
 pub struct ShadowMaps {
-    slots: Vec<Slot>,
+    slots: std::collections::HashMap<(usize, usize), Slot>,
     fbo: Option<glow::Framebuffer>,
 }
 
@@ -81,30 +84,50 @@ fn allocate(gl: &glow::Context, key: MapKey) -> Result<glow::Texture, String> {
 }
 
 impl ShadowMaps {
-    /// The texture of slot `index`, (re)allocated to match.
+    /// The texture of `light`'s view `view`, (re)allocated to match, and the key of what it
+    /// holds.
     pub fn slot(
         &mut self,
         gl: &glow::Context,
-        index: usize,
+        light: usize,
+        view: usize,
         cube: bool,
         size: u32,
         bits: DepthBits,
-    ) -> Result<glow::Texture, String> {
+    ) -> Result<(glow::Texture, Option<u64>), String> {
         let key = MapKey { cube, size, bits };
-        if index < self.slots.len() {
-            if self.slots[index].key != key {
-                let t = allocate(gl, key)?;
+        match self.slots.get(&(light, view)) {
+            Some(slot) if slot.key == key => return Ok((slot.texture, slot.content)),
+            Some(old) => {
                 // SAFETY: the old texture is ours and no longer referenced.
-                unsafe { gl.delete_texture(self.slots[index].texture) };
-                self.slots[index] = Slot { texture: t, key };
+                unsafe { gl.delete_texture(old.texture) };
             }
-        } else {
-            while self.slots.len() <= index {
-                let t = allocate(gl, key)?;
-                self.slots.push(Slot { texture: t, key });
-            }
+            None => {}
         }
-        Ok(self.slots[index].texture)
+        let texture = allocate(gl, key)?;
+        self.slots.insert(
+            (light, view),
+            Slot {
+                texture,
+                key,
+                content: None,
+            },
+        );
+        Ok((texture, None))
+    }
+
+    /// Records what `light`'s view `view` now holds.
+    pub fn set_content(&mut self, light: usize, view: usize, content: Option<u64>) {
+        if let Some(s) = self.slots.get_mut(&(light, view)) {
+            s.content = content;
+        }
+    }
+
+    /// Forgets every map's contents (a new scene).
+    pub fn forget(&mut self) {
+        for s in self.slots.values_mut() {
+            s.content = None;
+        }
     }
 
     /// Sampling state for the lit pass: compare mode (ARB_shadow) and filtering.
@@ -154,7 +177,7 @@ impl ShadowMaps {
     pub fn delete(&mut self, gl: &glow::Context) {
         // SAFETY: called once by the owner.
         unsafe {
-            for s in self.slots.drain(..) {
+            for (_, s) in self.slots.drain() {
                 gl.delete_texture(s.texture);
             }
             if let Some(f) = self.fbo.take() {

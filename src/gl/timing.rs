@@ -15,6 +15,8 @@ enum Span {
 
 pub struct PassTimer {
     use_queries: bool,
+    /// This frame times nothing (the CPU clock would need glFinish between passes).
+    silent: bool,
     pool: Vec<glow::Query>,
     open: Option<(String, Span)>,
     gpu_done: Vec<(String, glow::Query)>,
@@ -25,6 +27,7 @@ impl PassTimer {
     pub fn new(use_queries: bool) -> PassTimer {
         PassTimer {
             use_queries,
+            silent: false,
             pool: Vec::new(),
             open: None,
             gpu_done: Vec::new(),
@@ -36,9 +39,18 @@ impl PassTimer {
         self.use_queries
     }
 
+    /// Starts a frame. Without timer queries, `per_pass = false` times no pass: the frame then
+    /// runs without the glFinish calls that serialise it, and only its total is meaningful.
+    pub fn start_frame(&mut self, per_pass: bool) {
+        self.silent = !per_pass && !self.use_queries;
+    }
+
     /// Starts timing the GPU work of pass `name`; ends any pass still open.
     pub fn begin(&mut self, gl: &glow::Context, name: impl Into<String>) {
         self.end(gl);
+        if self.silent {
+            return;
+        }
         let name = name.into();
         let span = if self.use_queries {
             let q = match self.pool.pop() {
@@ -86,6 +98,9 @@ impl PassTimer {
 
     /// Records a CPU-only stage (e.g. building shadow volumes).
     pub fn record_cpu(&mut self, name: impl Into<String>, ms: f64) {
+        if self.silent {
+            return;
+        }
         self.results.push(PassTime {
             name: name.into(),
             ms,

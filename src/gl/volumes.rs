@@ -25,10 +25,15 @@ pub struct VolumeStats {
     pub zpass_parts: usize,
     /// Caster triangles whose facing was tested when building.
     pub triangles_tested: usize,
+    /// Facing triangles left out: their shadow reaches no receiver in view (planner).
+    pub triangles_culled: usize,
     /// CPU time of the last build (silhouettes and extrusion).
     pub build_ms: f64,
-    /// Whether this frame rebuilt the volumes (false: reused from the cache).
+    /// Whether this frame rebuilt any part (false: all reused from the cache).
     pub rebuilt: bool,
+    /// Parts built this frame, and parts reused from earlier frames.
+    pub parts_built: usize,
+    pub parts_reused: usize,
 }
 
 /// One part's vertex ranges in the light's buffer.
@@ -42,11 +47,19 @@ pub struct PartRange {
 }
 
 pub struct LightVolumes {
-    key: u64,
     pub vao: glow::VertexArray,
     vbo: glow::Buffer,
     pub parts: Vec<PartRange>,
     pub stats: VolumeStats,
+    /// Each part's last geometry, by (group, piece, chunked), with what it was built from.
+    meshes: HashMap<(usize, usize, bool), CachedPart>,
+    /// What the buffer holds: the part keys in order.
+    uploaded: u64,
+}
+
+struct CachedPart {
+    key: u64,
+    mesh: volume::VolumeMesh,
 }
 
 #[derive(Default)]
@@ -63,30 +76,36 @@ fn settings(o: &ShadowVolumeOptions) -> VolumeSettings {
     }
 }
 
-fn key(scene: &Scene, lp: &LightPlan, o: &ShadowVolumeOptions) -> u64 {
+/// What one part's geometry depends on: the light, the build settings, its counting (caps) and
+/// its caster's transform. A moving model changes only its own parts' keys.
+fn part_key(
+    light: glam::Vec3,
+    o: &ShadowVolumeOptions,
+    p: &VolumePart,
+    model: &Mat4,
+    receivers: u64,
+) -> u64 {
     let mut h = std::collections::hash_map::DefaultHasher::new();
-    let l = &scene.lights[lp.light];
-    l.position.to_array().map(f32::to_bits).hash(&mut h);
+    receivers.hash(&mut h);
+    light.to_array().map(f32::to_bits).hash(&mut h);
     (
         o.edge_rule as u8,
         o.extrusion as u8,
         o.finite_distance.to_bits(),
         o.facing_epsilon.to_bits(),
+        p.group,
+        p.component,
+        p.chunked,
+        p.counting as u8,
     )
         .hash(&mut h);
-    let groups = scene.caster_groups();
-    for p in &lp.volumes {
-        (p.group, p.component, p.counting as u8).hash(&mut h);
-        volume::group_transform(scene, groups.groups[p.group].owner)
-            .to_cols_array()
-            .map(f32::to_bits)
-            .hash(&mut h);
-    }
+    model.to_cols_array().map(f32::to_bits).hash(&mut h);
     h.finish()
 }
 
 impl VolumeCache {
-    /// The light's volumes, rebuilt if needed (always when `caching` is off).
+    /// The light's volumes: parts whose key changed are rebuilt (all of them when `caching` is
+    /// off), the buffer re-uploaded when its contents changed.
     pub fn prepare(
         &mut self,
         gl: &glow::Context,
@@ -94,38 +113,127 @@ impl VolumeCache {
         lp: &LightPlan,
         o: &ShadowVolumeOptions,
     ) -> Result<&LightVolumes, String> {
-        let k = key(scene, lp, o);
-        let fresh = match self.lights.get(&lp.light) {
-            Some(v) => o.caching && v.key == k,
-            None => false,
-        };
-        if fresh {
-            let v = self.lights.get_mut(&lp.light).expect("checked above");
-            v.stats.rebuilt = false;
-            return Ok(v);
-        }
         let start = Instant::now();
         let groups = scene.caster_groups();
         let s = settings(o);
         let light_world = scene.lights[lp.light].position;
-        let mut vertices: Vec<[f32; 4]> = Vec::new();
-        let mut parts = Vec::new();
+        let lv = match self.lights.entry(lp.light) {
+            std::collections::hash_map::Entry::Occupied(e) => e.into_mut(),
+            std::collections::hash_map::Entry::Vacant(e) => {
+                // SAFETY: a vertex array and a buffer of our own, kept for this light.
+                let (vao, vbo) = unsafe { (gl.create_vertex_array()?, gl.create_buffer()?) };
+                e.insert(LightVolumes {
+                    vao,
+                    vbo,
+                    parts: Vec::new(),
+                    stats: VolumeStats::default(),
+                    meshes: HashMap::new(),
+                    uploaded: 0,
+                })
+            }
+        };
         let mut stats = VolumeStats {
             light: lp.light,
-            rebuilt: true,
             ..VolumeStats::default()
         };
+        let radius = scene.lights[lp.light].radius;
+        // The receivers' boxes in each caster group's space.
+        let mut local_boxes: HashMap<usize, Vec<crate::scene::Aabb>> = HashMap::new();
+        let mut keys = Vec::with_capacity(lp.volumes.len());
+        let mut models = Vec::with_capacity(lp.volumes.len());
         for p in &lp.volumes {
             let group = &groups.groups[p.group];
             let model = volume::group_transform(scene, group.owner);
-            let light_local = model.inverse().transform_point3(light_world).as_dvec3();
-            let with_caps = p.counting == Counting::ZFail;
-            let mesh = volume::build_volume(group, p.component, light_local, &s, with_caps);
-            stats.triangles_tested += group.components[p.component].triangles.len();
+            let to_local = model.inverse();
+            let light_local = to_local.transform_point3(light_world);
+            let piece = if p.chunked {
+                &group.chunks[p.component]
+            } else {
+                &group.components[p.component]
+            };
+            let boxes = local_boxes.entry(p.group).or_insert_with(|| {
+                lp.volume_receivers
+                    .iter()
+                    .map(|b| b.transformed(&to_local))
+                    .collect()
+            });
+            // The range in the group's space (a scaled model stretches it).
+            let stretch = [to_local.x_axis, to_local.y_axis, to_local.z_axis]
+                .iter()
+                .map(|a| a.truncate().length())
+                .fold(0.0f32, f32::max);
+            let local_radius = radius * stretch.max(1e-6);
+            // The part depends only on the receivers its shadow can reach: a moving receiver
+            // rebuilds the parts that shadow it, not the light's whole volume.
+            let piece_shadow = volume::shadow_bounds(&piece.bounds, light_local, local_radius);
+            let near: Vec<crate::scene::Aabb> = boxes
+                .iter()
+                .filter(|b| b.intersects(&piece_shadow))
+                .copied()
+                .collect();
+            let receivers_key = {
+                let mut h = std::collections::hash_map::DefaultHasher::new();
+                lp.volume_receivers.is_empty().hash(&mut h);
+                local_radius.to_bits().hash(&mut h);
+                for b in &near {
+                    (
+                        b.min.to_array().map(f32::to_bits),
+                        b.max.to_array().map(f32::to_bits),
+                    )
+                        .hash(&mut h);
+                }
+                h.finish()
+            };
+            let key = part_key(light_world, o, p, &model, receivers_key);
+            let cached = lv
+                .meshes
+                .get(&(p.group, p.component, p.chunked))
+                .is_some_and(|c| o.caching && c.key == key);
+            if cached {
+                stats.parts_reused += 1;
+            } else {
+                let with_caps = p.counting == Counting::ZFail;
+                let cull = (!lp.volume_receivers.is_empty()).then_some(volume::ReceiverCull {
+                    boxes: &near,
+                    radius: local_radius,
+                });
+                let mesh = volume::build_volume_of(
+                    group,
+                    piece,
+                    light_local.as_dvec3(),
+                    &s,
+                    with_caps,
+                    cull,
+                );
+                stats.triangles_culled += mesh.culled;
+                stats.triangles_tested += piece.triangles.len();
+                stats.parts_built += 1;
+                lv.meshes
+                    .insert((p.group, p.component, p.chunked), CachedPart { key, mesh });
+            }
             match p.counting {
                 Counting::ZFail => stats.zfail_parts += 1,
                 Counting::ZPass => stats.zpass_parts += 1,
             }
+            keys.push(key);
+            models.push(model);
+        }
+        // Parts no longer planned are dropped: the cache holds this frame's parts only.
+        let wanted: std::collections::HashSet<(usize, usize, bool)> = lp
+            .volumes
+            .iter()
+            .map(|p| (p.group, p.component, p.chunked))
+            .collect();
+        lv.meshes.retain(|k, _| wanted.contains(k));
+        let contents = {
+            let mut h = std::collections::hash_map::DefaultHasher::new();
+            keys.hash(&mut h);
+            h.finish()
+        };
+        let mut parts = Vec::with_capacity(lp.volumes.len());
+        let mut vertices: Vec<[f32; 4]> = Vec::new();
+        for (p, model) in lp.volumes.iter().zip(models) {
+            let mesh = &lv.meshes[&(p.group, p.component, p.chunked)].mesh;
             if mesh.vertices.is_empty() {
                 continue;
             }
@@ -140,36 +248,27 @@ impl VolumeCache {
             });
             vertices.extend_from_slice(&mesh.vertices);
         }
-        stats.build_ms = start.elapsed().as_secs_f64() * 1e3;
-        let (vao, vbo) = match self.lights.remove(&lp.light) {
-            Some(old) => (old.vao, old.vbo),
-            // SAFETY: a vertex array and a buffer of our own, kept for this light.
-            None => unsafe { (gl.create_vertex_array()?, gl.create_buffer()?) },
-        };
-        // SAFETY: uploads plain f32 vertices; attribute 0 is a vec4 position.
-        unsafe {
-            gl.bind_vertex_array(Some(vao));
-            gl.bind_buffer(glow::ARRAY_BUFFER, Some(vbo));
-            let bytes = std::slice::from_raw_parts(
-                vertices.as_ptr() as *const u8,
-                std::mem::size_of_val(vertices.as_slice()),
-            );
-            gl.buffer_data_u8_slice(glow::ARRAY_BUFFER, bytes, glow::DYNAMIC_DRAW);
-            gl.enable_vertex_attrib_array(0);
-            gl.vertex_attrib_pointer_f32(0, 4, glow::FLOAT, false, 16, 0);
-            gl.bind_vertex_array(None);
-            gl.bind_buffer(glow::ARRAY_BUFFER, None);
+        stats.rebuilt = stats.parts_built > 0;
+        if contents != lv.uploaded || stats.rebuilt {
+            // SAFETY: uploads plain f32 vertices; attribute 0 is a vec4 position.
+            unsafe {
+                gl.bind_vertex_array(Some(lv.vao));
+                gl.bind_buffer(glow::ARRAY_BUFFER, Some(lv.vbo));
+                let bytes = std::slice::from_raw_parts(
+                    vertices.as_ptr() as *const u8,
+                    std::mem::size_of_val(vertices.as_slice()),
+                );
+                gl.buffer_data_u8_slice(glow::ARRAY_BUFFER, bytes, glow::DYNAMIC_DRAW);
+                gl.enable_vertex_attrib_array(0);
+                gl.vertex_attrib_pointer_f32(0, 4, glow::FLOAT, false, 16, 0);
+                gl.bind_vertex_array(None);
+                gl.bind_buffer(glow::ARRAY_BUFFER, None);
+            }
+            lv.uploaded = contents;
         }
-        self.lights.insert(
-            lp.light,
-            LightVolumes {
-                key: k,
-                vao,
-                vbo,
-                parts,
-                stats,
-            },
-        );
+        stats.build_ms = start.elapsed().as_secs_f64() * 1e3;
+        lv.parts = parts;
+        lv.stats = stats;
         Ok(&self.lights[&lp.light])
     }
 

@@ -110,7 +110,8 @@ pub fn explain(step: &Step, options: &Options) -> Explanation {
             ),
         },
         StepKind::Lit => {
-            let shadow = match options.technique_for(step.light.unwrap_or(0)) {
+            let technique = step.technique.unwrap_or(crate::options::Technique::None);
+            let shadow = match technique {
                 crate::options::Technique::ShadowMap => match sm.result {
                     CompareResult::Alpha => {
                         "each fragment is projected into the light's map (texgen emulated in the \
@@ -130,7 +131,9 @@ pub fn explain(step: &Step, options: &Options) -> Explanation {
                         "every fragment is lit; the fill quad darkens the shadowed ones next"
                     }
                 },
-                crate::options::Technique::None => "no shadow test",
+                crate::options::Technique::None | crate::options::Technique::Auto => {
+                    "no shadow test"
+                }
             };
             Explanation {
                 title: format!("Lit pass ({who})"),
@@ -164,6 +167,7 @@ mod tests {
             kind: StepKind::LightView,
             light: Some(1),
             face: Some(2),
+            technique: None,
         };
         let mut o = Options::default();
         let a = explain(&step, &o);
@@ -175,6 +179,7 @@ mod tests {
             kind: StepKind::Stencil,
             light: Some(0),
             face: None,
+            technique: None,
         };
         assert!(explain(&stencil, &o).what.contains("depth-fail"));
         o.shadow_volume.counting = CountingMode::Zpass;

@@ -2,16 +2,21 @@
 //!
 //! The GL layer executes a [`Plan`] and decides nothing about *what* to draw.
 
+pub mod auto;
+pub mod cull;
 pub mod frustum;
+pub mod scissor;
 
 use crate::options::{CountingMode, Options, Technique, VolumeProjection};
 use crate::q3::vis::VisStats;
 use crate::scene::{Aabb, Camera, Scene, SurfaceOwner};
 use crate::shadow::projection;
-use crate::shadow::views::{ShadowView, shadow_views};
+use crate::shadow::views::{ShadowView, ViewKind, shadow_views};
 use crate::shadow::volume::{self, Counting};
+use auto::CostMemory;
 use frustum::Frustum;
 use glam::{Mat3, Mat4, Vec3};
+use scissor::Scissor;
 use serde::Serialize;
 
 /// The camera as the passes use it.
@@ -66,12 +71,16 @@ impl CameraSetup {
     }
 }
 
-/// One caster component's volume for one light.
+/// One caster piece's volume for one light.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct VolumePart {
     /// Index into the scene's caster groups.
     pub group: usize,
+    /// Index into the group's components, or its chunks when `chunked`.
     pub component: usize,
+    /// Whether the piece is a chunk (the planner culls chunks; the paper's frame extrudes
+    /// whole components).
+    pub chunked: bool,
     pub counting: Counting,
 }
 
@@ -80,13 +89,35 @@ pub struct VolumePart {
 pub struct LightPlan {
     /// Index into `Scene::lights`.
     pub light: usize,
+    /// The technique it runs with (resolved: never `auto`; `none` when it needs no shadow work).
     pub technique: Technique,
-    /// Position among this frame's shadowed lights: the paper grows the polygon offset with it.
+    /// Position among this frame's enabled lights: the paper grows the polygon offset with it.
     pub order: usize,
     /// Shadow-map views (shadow mapping only).
     pub views: Vec<ShadowView>,
     /// Volume parts (shadow volumes only).
     pub volumes: Vec<VolumePart>,
+    /// Surfaces the lit pass draws: visible receivers the light can reach.
+    pub receivers: Vec<u32>,
+    /// Per shadow-map view, the receivers its lit pass draws (an omni light's six spots: those
+    /// in the face's pyramid).
+    pub view_receivers: Vec<Vec<u32>>,
+    /// Per shadow-map view, the casters drawn into its map.
+    pub view_casters: Vec<Vec<u32>>,
+    /// Per shadow-map view, what its map depends on; a map drawn with the same key is reused.
+    pub view_keys: Vec<Option<u64>>,
+    /// Where the light's stencil and lit passes may draw (None: the whole frame).
+    pub scissor: Option<Scissor>,
+    /// Per shadow-map view, where its lit pass may draw (an omni light's six spots: the face's
+    /// part of the light's rectangle; None: the light's rectangle).
+    pub view_scissors: Vec<Option<Scissor>>,
+    /// An omni light's six spots lit in one pass (each fragment reads its face's map).
+    pub merged: bool,
+    /// Shadow volumes: the boxes of the receivers whose counts matter; a facing triangle whose
+    /// shadow reaches none of them is left out of its volume (empty: every triangle counts).
+    pub volume_receivers: Vec<Aabb>,
+    /// How the technique was chosen (`auto`, or why the light needs no shadow work).
+    pub reason: String,
 }
 
 /// What the plan decided, for stats overlays and bench JSON.
@@ -97,6 +128,30 @@ pub struct PlanStats {
     pub triangles_visible: usize,
     /// BSP visibility of Quake 3 worlds.
     pub vis: Option<VisStats>,
+    /// Lights `lighting` admits.
+    pub lights_enabled: usize,
+    /// Lights with passes this frame.
+    pub lights_planned: usize,
+    /// Lights whose range misses the view frustum or lands off screen.
+    pub lights_culled_frustum: usize,
+    /// Lights whose range reaches no visible BSP leaf or receiver.
+    pub lights_culled_pvs: usize,
+    /// Planned lights left without shadow work: no caster in range, or none whose shadow
+    /// reaches the view.
+    pub lights_without_casters: usize,
+    /// Receiver surfaces drawn by lit passes, summed over lights and views, and those the
+    /// planner left out.
+    pub receivers_drawn: usize,
+    pub receivers_culled: usize,
+    /// Casters drawn: surfaces into shadow maps (summed over views) plus volume components.
+    pub casters_drawn: usize,
+    pub casters_culled: usize,
+    /// Mean share of the frame inside the planned lights' scissor rectangles.
+    pub scissor_fraction: f64,
+    pub zpass_parts: usize,
+    pub zfail_parts: usize,
+    /// Per light `auto` decided for: "light i: technique (why)".
+    pub choices: Vec<String>,
 }
 
 /// Everything the passes need to know for one frame.
@@ -108,7 +163,21 @@ pub struct Plan {
     /// Per surface: drawn into shadow maps and volumes.
     pub casters: Vec<bool>,
     pub lights: Vec<LightPlan>,
+    /// Enabled lights the planner culled (their masks are empty).
+    pub culled: Vec<usize>,
     pub stats: PlanStats,
+}
+
+/// A hash of anything hashable.
+fn hash_of(v: impl std::hash::Hash) -> u64 {
+    use std::hash::Hasher;
+    let mut h = std::collections::hash_map::DefaultHasher::new();
+    v.hash(&mut h);
+    h.finish()
+}
+
+fn mat_bits(m: &Mat4) -> [u32; 16] {
+    m.to_cols_array().map(f32::to_bits)
 }
 
 impl Plan {
@@ -119,9 +188,20 @@ impl Plan {
 
     /// The plan for `camera` (a camera path's frame, the viewer's camera).
     pub fn build_at(scene: &Scene, camera: &Camera, options: &Options) -> Plan {
+        Plan::build_with(scene, camera, options, &CostMemory::default())
+    }
+
+    /// The plan for `camera`, with the costs measured so far (for `technique = auto`).
+    pub fn build_with(
+        scene: &Scene,
+        camera: &Camera,
+        options: &Options,
+        memory: &CostMemory,
+    ) -> Plan {
         let n = scene.lights.len();
-        let uses_volumes = options.uses(n, Technique::ShadowVolume);
-        let camera = if uses_volumes {
+        let may = |t: Technique| options.uses(n, t) || options.uses(n, Technique::Auto);
+        let uses_volumes = may(Technique::ShadowVolume);
+        let camera_setup = if uses_volumes {
             let far = scene
                 .bounds()
                 .corners()
@@ -142,8 +222,9 @@ impl Plan {
         let frustum = options
             .culling
             .frustum
-            .then(|| Frustum::from_view_proj(&camera.view_proj));
+            .then(|| Frustum::from_view_proj(&camera_setup.view_proj));
         let mut visible = vec![false; scene.surfaces.len()];
+        let mut leaves: Vec<Aabb> = Vec::new();
         let mut stats = PlanStats {
             surfaces: scene.surfaces.len(),
             ..PlanStats::default()
@@ -152,10 +233,11 @@ impl Plan {
             // Quake 3 worlds: the PVS and frustum tests of the paper's base renderer.
             Some(world) => {
                 stats.vis = Some(world.mark_visible(
-                    camera.position,
+                    camera_setup.position,
                     frustum.as_ref(),
                     options.culling.pvs,
                     &mut visible,
+                    &mut leaves,
                 ));
             }
             None => visible.iter_mut().for_each(|v| *v = true),
@@ -180,78 +262,327 @@ impl Plan {
                 m.visible && m.casts_shadows
             })
             .collect();
-        let caster_bounds: Vec<Aabb> = match options.uses(n, Technique::ShadowMap) {
-            false => Vec::new(),
-            true => scene
-                .surfaces
+        let caster_list: Vec<u32> = (0..casters.len())
+            .filter(|&i| casters[i])
+            .map(|i| i as u32)
+            .collect();
+        let caster_bounds: Vec<Aabb> = if may(Technique::ShadowMap) {
+            caster_list
                 .iter()
-                .zip(&casters)
-                .filter(|(_, c)| **c)
-                .map(|(s, _)| s.bounds)
-                .collect(),
+                .map(|&i| scene.surfaces[i as usize].bounds)
+                .collect()
+        } else {
+            Vec::new()
         };
-        // Shadow-volume casters, with their world bounds (for the depth-pass safety test).
+        let receivers_in_view: Vec<u32> = (0..visible.len())
+            .filter(|&i| visible[i] && scene.materials[scene.surfaces[i].material].receives_light)
+            .map(|i| i as u32)
+            .collect();
+        // Shadow-volume casters, with their world bounds (for culling and the depth-pass test).
         let groups = uses_volumes.then(|| scene.caster_groups());
+        let p = &options.plan;
+        let on = p.enabled;
+        // The planner culls pieces of at most CHUNK_TRIANGLES; the paper's frame, components.
+        let chunked = on && p.cull_casters;
         let components: Vec<(usize, usize, Aabb)> = groups
             .iter()
             .flat_map(|g| g.groups.iter().enumerate())
             .flat_map(|(gi, g)| {
                 let t = volume::group_transform(scene, g.owner);
-                g.components
+                let pieces = if chunked { &g.chunks } else { &g.components };
+                pieces
                     .iter()
                     .enumerate()
                     .map(move |(ci, c)| (gi, ci, c.bounds.transformed(&t)))
             })
             .collect();
-        let eye = camera.position;
-        let near = scene.camera.near;
-        let lights = (0..scene.lights.len())
-            .filter(|&i| options.light_enabled(i))
-            .enumerate()
-            .map(|(order, light)| {
-                let l = &scene.lights[light];
-                let technique = options.technique_for(light);
-                LightPlan {
-                    light,
-                    technique,
-                    order,
-                    views: match technique {
-                        Technique::ShadowMap => {
-                            shadow_views(l, &caster_bounds, &options.shadow_map)
-                        }
-                        _ => Vec::new(),
-                    },
-                    volumes: match technique {
-                        Technique::ShadowVolume => components
-                            .iter()
-                            .map(|&(group, component, bounds)| VolumePart {
-                                group,
-                                component,
-                                counting: match options.shadow_volume.counting {
-                                    CountingMode::Zfail => Counting::ZFail,
-                                    CountingMode::Zpass => Counting::ZPass,
-                                    CountingMode::Auto => {
-                                        if volume::potentially_inside_shadow(
-                                            &bounds, eye, l.position, near,
-                                        ) {
-                                            Counting::ZFail
-                                        } else {
-                                            Counting::ZPass
-                                        }
-                                    }
-                                },
-                            })
-                            .collect(),
-                        _ => Vec::new(),
-                    },
+
+        // Culling tests use the camera frustum without a far plane: volumes reach infinity.
+        let view_frustum = Frustum::from_view_proj(
+            &CameraSetup::new(camera, options.width, options.height).view_proj,
+        );
+        let eye = camera_setup.position;
+        let near = camera.near;
+        let screen = (camera_setup.width as f64 * camera_setup.height as f64).max(1.0);
+        let mut lights = Vec::new();
+        let mut culled = Vec::new();
+        let mut scissor_sum = 0.0;
+        let enabled: Vec<usize> = (0..n).filter(|&i| options.light_enabled(i)).collect();
+        stats.lights_enabled = enabled.len();
+        for (order, &index) in enabled.iter().enumerate() {
+            let l = &scene.lights[index];
+            let (pos, radius) = (l.position, l.radius);
+            // Light culling: the view frustum, then the visible leaves and receivers.
+            if on && p.cull_lights && !cull::sphere_meets_frustum(&view_frustum, pos, radius) {
+                stats.lights_culled_frustum += 1;
+                culled.push(index);
+                continue;
+            }
+            let receivers: Vec<u32> = if on && p.cull_receivers {
+                receivers_in_view
+                    .iter()
+                    .copied()
+                    .filter(|&s| {
+                        cull::sphere_meets_aabb(pos, radius, &scene.surfaces[s as usize].bounds)
+                    })
+                    .collect()
+            } else {
+                receivers_in_view.clone()
+            };
+            stats.receivers_culled += receivers_in_view.len() - receivers.len();
+            let reaches_leaf = scene.world.is_none()
+                || leaves
+                    .iter()
+                    .any(|b| cull::sphere_meets_aabb(pos, radius, b))
+                || receivers
+                    .iter()
+                    .any(|&s| matches!(scene.surfaces[s as usize].owner, SurfaceOwner::Model(_)));
+            let reaches_receiver = !p.cull_receivers || !receivers.is_empty();
+            if on && p.cull_lights && !(reaches_leaf && reaches_receiver) {
+                stats.lights_culled_pvs += 1;
+                culled.push(index);
+                continue;
+            }
+            let scissor = if on && p.scissor {
+                match scissor::sphere_scissor(&camera_setup, pos, radius) {
+                    Some(s) => Some(s),
+                    None => {
+                        stats.lights_culled_frustum += 1;
+                        culled.push(index);
+                        continue;
+                    }
                 }
-            })
-            .collect();
+            } else {
+                None
+            };
+
+            // The technique: asked for, or chosen.
+            let alpha_casters = || {
+                caster_list.iter().any(|&c| {
+                    let s = &scene.surfaces[c as usize];
+                    scene.materials[s.material].alpha_test.is_some()
+                        && cull::sphere_meets_aabb(pos, radius, &s.bounds)
+                })
+            };
+            let (mut technique, mut reason) = match options.technique_for(index) {
+                Technique::Auto => {
+                    let c = auto::choose(index, options, memory, alpha_casters());
+                    stats
+                        .choices
+                        .push(format!("light {index}: {} ({})", c.technique, c.reason));
+                    (c.technique, c.reason)
+                }
+                t => (t, String::new()),
+            };
+
+            let mut plan = LightPlan {
+                light: index,
+                technique,
+                order,
+                views: Vec::new(),
+                volumes: Vec::new(),
+                receivers,
+                view_receivers: Vec::new(),
+                view_casters: Vec::new(),
+                view_keys: Vec::new(),
+                scissor,
+                view_scissors: Vec::new(),
+                merged: false,
+                volume_receivers: Vec::new(),
+                reason: String::new(),
+            };
+            match technique {
+                Technique::ShadowMap => {
+                    plan.views = shadow_views(l, &caster_bounds, &options.shadow_map);
+                    let sm_key = hash_of((
+                        format!("{:?}", options.shadow_map),
+                        order,
+                        mat_bits(&Mat4::from_translation(pos)),
+                        radius.to_bits(),
+                        format!("{:?}", l.kind),
+                    ));
+                    for view in &plan.views {
+                        let view_frustum = (view.kind != ViewKind::Cube)
+                            .then(|| Frustum::from_view_proj(&view.view_proj()));
+                        let drawn: Vec<u32> = if on && p.cull_casters {
+                            caster_list
+                                .iter()
+                                .copied()
+                                .filter(|&c| {
+                                    let b = &scene.surfaces[c as usize].bounds;
+                                    cull::sphere_meets_aabb(pos, radius, b)
+                                        && view_frustum
+                                            .as_ref()
+                                            .is_none_or(|f| f.intersects_aabb(b))
+                                })
+                                .collect()
+                        } else {
+                            caster_list.clone()
+                        };
+                        stats.casters_drawn += drawn.len();
+                        stats.casters_culled += caster_list.len() - drawn.len();
+                        let lit: Vec<u32> = match view.kind {
+                            ViewKind::Face(f) if on && p.cull_receivers => {
+                                let pyramid = cull::face_pyramid(pos, f);
+                                plan.receivers
+                                    .iter()
+                                    .copied()
+                                    .filter(|&s| {
+                                        pyramid.intersects_aabb(&scene.surfaces[s as usize].bounds)
+                                    })
+                                    .collect()
+                            }
+                            _ => plan.receivers.clone(),
+                        };
+                        let key = (on && p.cache_maps).then(|| {
+                            let moving: Vec<[u32; 16]> = drawn
+                                .iter()
+                                .filter_map(|&c| match scene.surfaces[c as usize].owner {
+                                    SurfaceOwner::Model(m) => {
+                                        Some(mat_bits(&scene.models[m].transform))
+                                    }
+                                    SurfaceOwner::World => None,
+                                })
+                                .collect();
+                            hash_of((
+                                sm_key,
+                                mat_bits(&view.view_proj()),
+                                format!("{:?}", view.kind),
+                                &drawn,
+                                moving,
+                            ))
+                        });
+                        let face_rect = match (view.kind, scissor) {
+                            (ViewKind::Face(f), Some(light_rect)) => {
+                                Some(scissor::face_scissor(&camera_setup, pos, radius, f).map_or(
+                                    Scissor {
+                                        width: 0,
+                                        height: 0,
+                                        ..light_rect
+                                    },
+                                    |r| r.intersect(&light_rect),
+                                ))
+                            }
+                            _ => scissor,
+                        };
+                        plan.view_receivers.push(lit);
+                        plan.view_casters.push(drawn);
+                        plan.view_keys.push(key);
+                        plan.view_scissors.push(face_rect);
+                    }
+                    plan.merged = on
+                        && p.merge_faces
+                        && options.shadow_map.outside != crate::options::Outside::ClipPlanes
+                        && plan.views.len() == 6
+                        && plan
+                            .views
+                            .iter()
+                            .all(|v| matches!(v.kind, ViewKind::Face(_)));
+                    if on && p.cull_lights && plan.view_casters.iter().all(|c| c.is_empty()) {
+                        technique = Technique::None;
+                        reason = "no caster in range".into();
+                        plan.views.clear();
+                        plan.view_receivers.clear();
+                        plan.view_casters.clear();
+                        plan.view_keys.clear();
+                        plan.view_scissors.clear();
+                    }
+                }
+                Technique::ShadowVolume => {
+                    // The planner turns depth-fail into auto; a depth-pass asked for stays.
+                    let counting_auto = match options.shadow_volume.counting {
+                        CountingMode::Auto => true,
+                        CountingMode::Zfail => on && p.counting,
+                        CountingMode::Zpass => false,
+                    };
+                    let alpha_casters_boxes: Vec<Aabb> = caster_list
+                        .iter()
+                        .map(|&c| &scene.surfaces[c as usize])
+                        .filter(|s| scene.materials[s.material].alpha_test.is_some())
+                        .map(|s| s.bounds)
+                        .collect();
+                    // Receiver boxes: a piece whose shadow meets none of them shadows nothing
+                    // in view (Forsyth).
+                    let receiver_boxes: Vec<Aabb> = plan
+                        .receivers
+                        .iter()
+                        .map(|&r| scene.surfaces[r as usize].bounds)
+                        .collect();
+                    for &(group, component, bounds) in &components {
+                        let keep = !(on && p.cull_casters) || {
+                            let shadow = cull::shadow_bounds(&bounds, pos, radius);
+                            cull::sphere_meets_aabb(pos, radius, &bounds)
+                                && view_frustum.intersects_aabb(&shadow)
+                                && receiver_boxes.iter().any(|r| r.intersects(&shadow))
+                        };
+                        if !keep {
+                            stats.casters_culled += 1;
+                            continue;
+                        }
+                        stats.casters_drawn += 1;
+                        let counting = if counting_auto {
+                            // A ray seen through an alpha-tested caster's holes enters its
+                            // volume through the front cap, which depth-pass does not draw.
+                            if volume::potentially_inside_shadow(&bounds, eye, pos, near)
+                                || alpha_casters_boxes.iter().any(|b| b.intersects(&bounds))
+                            {
+                                Counting::ZFail
+                            } else {
+                                Counting::ZPass
+                            }
+                        } else if options.shadow_volume.counting == CountingMode::Zpass {
+                            Counting::ZPass
+                        } else {
+                            Counting::ZFail
+                        };
+                        match counting {
+                            Counting::ZFail => stats.zfail_parts += 1,
+                            Counting::ZPass => stats.zpass_parts += 1,
+                        }
+                        plan.volumes.push(VolumePart {
+                            group,
+                            component,
+                            chunked,
+                            counting,
+                        });
+                    }
+                    if on && p.cull_casters {
+                        plan.volume_receivers = receiver_boxes;
+                    }
+                    if on && p.cull_lights && plan.volumes.is_empty() {
+                        technique = Technique::None;
+                        reason = "no caster whose shadow reaches the view".into();
+                    }
+                }
+                _ => {}
+            }
+            if technique == Technique::None && !reason.is_empty() {
+                stats.lights_without_casters += 1;
+            }
+            plan.technique = technique;
+            plan.reason = reason;
+            let lit_passes = match plan.technique {
+                Technique::ShadowMap if !plan.merged => {
+                    plan.view_receivers.iter().map(Vec::len).sum()
+                }
+                _ => plan.receivers.len(),
+            };
+            stats.receivers_drawn += lit_passes;
+            scissor_sum += plan.scissor.map_or(1.0, |s| s.area() as f64 / screen);
+            lights.push(plan);
+        }
+        stats.lights_planned = lights.len();
+        stats.scissor_fraction = if lights.is_empty() {
+            0.0
+        } else {
+            scissor_sum / lights.len() as f64
+        };
         Plan {
-            camera,
+            camera: camera_setup,
             visible,
             casters,
             lights,
+            culled,
             stats,
         }
     }

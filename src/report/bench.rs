@@ -6,16 +6,21 @@
 //! first frame, against the exact reference (which is computed once per view and light and
 //! reused by every configuration).
 
+use crate::frame::CacheStats;
 use crate::frame::{Frame, Mask};
 use crate::gl::volumes::VolumeStats;
 use crate::gl::{FrameRequest, RenderError, Renderer};
 use crate::options::{OptionError, Options, Technique};
+use crate::plan::PlanStats;
 use crate::scene::Scene;
 use crate::scene::path::PathKey;
 use crate::truth::{self, Counts, Reference, Tracing};
 use indicatif::{ProgressBar, ProgressStyle};
 use serde::Serialize;
 use std::collections::{BTreeMap, HashMap};
+
+/// Frames timed pass by pass for each configuration's breakdown (after its measured frames).
+pub const PASS_FRAMES: usize = 3;
 
 /// How frames are taken.
 #[derive(Debug, Clone)]
@@ -175,6 +180,11 @@ pub struct BenchRow {
     pub error_per_light: Vec<(usize, ErrorRow)>,
     /// Shadow-volume work per light (quads, caps, build time), from the error frame.
     pub volumes: Vec<VolumeStats>,
+    /// What the planner decided for the error frame (lights and casters culled, scissor,
+    /// counting, `auto`'s choices).
+    pub plan: PlanStats,
+    /// What the error frame reused from the frames before it.
+    pub cache: CacheStats,
 }
 
 /// Sums per-light passes into `lights.<stage>` entries, next to the passes themselves.
@@ -197,6 +207,8 @@ struct FrameError {
     total: Counts,
     per_light: Vec<(usize, Counts)>,
     volumes: Vec<VolumeStats>,
+    plan: PlanStats,
+    cache: CacheStats,
 }
 
 /// The path's first frame of one configuration, with its masks, the exact masks and the error.
@@ -250,14 +262,25 @@ impl<'a> Bench<'a> {
             passes: BTreeMap::new(),
             clock: "cpu",
         };
+        // Frame times without per-pass glFinish (it would serialise llvmpipe's pipeline)...
+        let frame_only = FrameRequest {
+            frame_only: true,
+            ..FrameRequest::default()
+        };
         for i in 0..self.settings.frames.max(1) {
+            let f = self
+                .renderer
+                .render_at(self.scene, &camera(i), options, frame_only)?;
+            m.frame_ms.push(f.frame_ms);
+        }
+        // ...then a few frames timed pass by pass for the breakdown.
+        for i in 0..self.settings.frames.clamp(1, PASS_FRAMES) {
             let f = self.renderer.render_at(
                 self.scene,
                 &camera(i),
                 options,
                 FrameRequest::default(),
             )?;
-            m.frame_ms.push(f.frame_ms);
             for (name, ms) in pass_totals(&f) {
                 m.passes.entry(name).or_default().push(ms);
             }
@@ -349,6 +372,8 @@ impl<'a> Bench<'a> {
             total: c.total,
             per_light: c.per_light,
             volumes: c.frame.volumes,
+            plan: c.frame.plan_stats,
+            cache: c.frame.cache,
         })
     }
 
@@ -392,6 +417,8 @@ impl<'a> Bench<'a> {
                 total,
                 per_light,
                 volumes,
+                plan,
+                cache,
             } = self.error(&c.options)?;
             let frame_ms = stats(&m.frame_ms);
             rows.push(BenchRow {
@@ -423,6 +450,8 @@ impl<'a> Bench<'a> {
                     .map(|(l, c)| (*l, ErrorRow::from(c)))
                     .collect(),
                 volumes,
+                plan,
+                cache,
             });
             bar.inc(1);
         }

@@ -65,6 +65,14 @@ impl Aabb {
         self.min = self.min.min(p);
         self.max = self.max.max(p);
     }
+    /// Whether the boxes overlap (touching counts); empty boxes meet nothing.
+    pub fn intersects(&self, o: &Aabb) -> bool {
+        !self.is_empty()
+            && !o.is_empty()
+            && self.min.cmple(o.max).all()
+            && o.min.cmple(self.max).all()
+    }
+
     pub fn union(&self, o: &Aabb) -> Aabb {
         Aabb {
             min: self.min.min(o.min),

@@ -43,6 +43,127 @@ pub struct CasterGroup {
     pub owner: SurfaceOwner,
     pub connectivity: Connectivity,
     pub components: Vec<Component>,
+    /// The same triangles in pieces of at most [`CHUNK_TRIANGLES`]: each component split in
+    /// space. A piece's volume is closed on its own (its cut edges are extruded like open
+    /// edges), so the planner can cull pieces of a large connected world one by one.
+    pub chunks: Vec<Component>,
+}
+
+/// The part of space where a caster inside `caster` can shadow receivers within `radius` of the
+/// light: the union of segments from each caster point away from the light to the range's edge
+/// lies in the hull of the box and its image scaled about the light by T = radius / (distance to
+/// the box); its bounds, clipped to the range's box.
+pub fn shadow_bounds(caster: &Aabb, light: Vec3, radius: f32) -> Aabb {
+    let range = Aabb {
+        min: light - radius,
+        max: light + radius,
+    };
+    let nearest = light.clamp(caster.min, caster.max);
+    let d = nearest.distance(light);
+    if d <= 1e-3 {
+        // The light touches or is inside the box: the shadow can go anywhere in range.
+        return range;
+    }
+    let t = (radius / d).max(1.0);
+    let corners = caster.corners();
+    let pushed = corners.map(|c| light + (c - light) * t);
+    let hull = Aabb::from_points(corners.into_iter().chain(pushed));
+    Aabb {
+        min: hull.min.max(range.min),
+        max: hull.max.min(range.max),
+    }
+}
+
+/// The receivers a volume has to be right for, in the group's space, and the light's range:
+/// a facing triangle whose shadow can reach none of them is treated as not facing. Its shadow
+/// would hold no receiver, and the rest of the volume stays closed around the cut (planner).
+#[derive(Debug, Clone, Copy)]
+pub struct ReceiverCull<'a> {
+    pub boxes: &'a [Aabb],
+    pub radius: f32,
+}
+
+/// How far behind a triangle's plane a receiver must reach to be in its shadow: the exact
+/// reference lifts its rays 0.01 units off surfaces, so it resolves nothing closer either.
+const BEHIND: f64 = 0.01;
+
+/// Whether facing triangle `t`'s shadow can reach one of `boxes` (those already known to meet
+/// its piece's shadow): its shadow is the part of the pyramid from the light through the
+/// triangle that lies behind the triangle's plane, and a box must reach inside all four of those
+/// planes (a conservative test: a box near an edge of the pyramid may pass).
+fn shadow_reaches(c: &Connectivity, t: usize, light: Vec3, radius: f32, boxes: &[&Aabb]) -> bool {
+    let l = light.as_dvec3();
+    let corners = c.triangles[t].map(|v| c.positions[v as usize]);
+    let in_range = shadow_bounds(&Aabb::from_points(corners), light, radius);
+    let tri = corners.map(|p| p.as_dvec3());
+    let plane = &c.planes[t];
+    // Planes (n, d), inside where n·x + d >= 0: behind the triangle, and the pyramid's sides.
+    let mut planes = vec![(-plane.normal, -plane.d - BEHIND)];
+    for k in 0..3 {
+        let (a, b, opposite) = (tri[k], tri[(k + 1) % 3], tri[(k + 2) % 3]);
+        let mut n = (b - a).cross(a - l);
+        if n.length_squared() < 1e-24 {
+            continue;
+        }
+        n = n.normalize();
+        if n.dot(opposite - a) < 0.0 {
+            n = -n;
+        }
+        planes.push((n, -n.dot(a)));
+    }
+    boxes.iter().any(|b| {
+        b.intersects(&in_range)
+            && planes.iter().all(|(n, d)| {
+                // The box corner furthest inside the plane.
+                let corner = glam::DVec3::new(
+                    if n.x >= 0.0 {
+                        b.max.x as f64
+                    } else {
+                        b.min.x as f64
+                    },
+                    if n.y >= 0.0 {
+                        b.max.y as f64
+                    } else {
+                        b.min.y as f64
+                    },
+                    if n.z >= 0.0 {
+                        b.max.z as f64
+                    } else {
+                        b.min.z as f64
+                    },
+                );
+                n.dot(corner) + d >= 0.0
+            })
+    })
+}
+
+/// Largest piece of [`CasterGroup::chunks`].
+pub const CHUNK_TRIANGLES: usize = 256;
+
+/// Splits `tris` at the median centroid along the longest axis until pieces are small enough.
+fn split_chunks(c: &Connectivity, tris: Vec<u32>, out: &mut Vec<Vec<u32>>) {
+    if tris.len() <= CHUNK_TRIANGLES {
+        out.push(tris);
+        return;
+    }
+    let centroid = |t: u32| {
+        let [a, b, d] = c.triangles[t as usize].map(|v| c.positions[v as usize]);
+        (a + b + d) / 3.0
+    };
+    let bounds = Aabb::from_points(tris.iter().map(|&t| centroid(t)));
+    let size = bounds.max - bounds.min;
+    let axis = if size.x >= size.y && size.x >= size.z {
+        0
+    } else if size.y >= size.z {
+        1
+    } else {
+        2
+    };
+    let mut tris = tris;
+    tris.sort_by(|&a, &b| centroid(a)[axis].total_cmp(&centroid(b)[axis]));
+    let right = tris.split_off(tris.len() / 2);
+    split_chunks(c, tris, out);
+    split_chunks(c, right, out);
 }
 
 /// Every caster group of a scene, built once per scene.
@@ -100,10 +221,45 @@ impl CasterGroup {
             let c = tri_component[connectivity.triangles_of(e)[0] as usize];
             components[c as usize].edges.push(ei as u32);
         }
+        let mut pieces = Vec::new();
+        for comp in &components {
+            split_chunks(&connectivity, comp.triangles.clone(), &mut pieces);
+        }
+        let mut tri_chunk = vec![0u32; n];
+        let mut chunks: Vec<Component> = pieces
+            .into_iter()
+            .enumerate()
+            .map(|(i, triangles)| {
+                let mut bounds = Aabb::EMPTY;
+                for &t in &triangles {
+                    tri_chunk[t as usize] = i as u32;
+                    for v in connectivity.triangles[t as usize] {
+                        bounds.extend(connectivity.positions[v as usize]);
+                    }
+                }
+                Component {
+                    triangles,
+                    edges: Vec::new(),
+                    bounds,
+                }
+            })
+            .collect();
+        // An edge belongs to every piece holding one of its triangles.
+        for (ei, e) in connectivity.edges.iter().enumerate() {
+            let mut seen: Vec<u32> = Vec::new();
+            for &t in connectivity.triangles_of(e) {
+                let c = tri_chunk[t as usize];
+                if !seen.contains(&c) {
+                    seen.push(c);
+                    chunks[c as usize].edges.push(ei as u32);
+                }
+            }
+        }
         CasterGroup {
             owner,
             connectivity,
             components,
+            chunks,
         }
     }
 }
@@ -190,6 +346,8 @@ pub struct VolumeSettings {
 pub struct VolumeMesh {
     /// Side quads (two triangles each), then front-cap triangles, then back-cap triangles.
     pub vertices: Vec<[f32; 4]>,
+    /// Facing triangles left out because their shadow reaches no receiver.
+    pub culled: usize,
     pub side_vertices: usize,
     pub cap_vertices: usize,
     /// Edges extruded.
@@ -236,10 +394,20 @@ pub fn facing_flags(
     light: DVec3,
     epsilon: f32,
 ) -> Vec<bool> {
+    facing_flags_of(group, &group.components[component], light, epsilon)
+}
+
+/// [`facing_flags`] for any piece of the group (a component or a chunk).
+pub fn facing_flags_of(
+    group: &CasterGroup,
+    piece: &Component,
+    light: DVec3,
+    epsilon: f32,
+) -> Vec<bool> {
     let c = &group.connectivity;
     let pos = |i: u32| c.positions[i as usize].as_dvec3();
     let mut facing = vec![false; c.triangles.len()];
-    for &t in &group.components[component].triangles {
+    for &t in &piece.triangles {
         let tri = c.triangles[t as usize];
         let plane = &c.planes[t as usize];
         if plane.normal == DVec3::ZERO || tri.iter().any(|&v| pos(v) == light) {
@@ -286,10 +454,45 @@ pub fn build_volume(
     s: &VolumeSettings,
     with_caps: bool,
 ) -> VolumeMesh {
+    build_volume_of(
+        group,
+        &group.components[component],
+        light,
+        s,
+        with_caps,
+        None,
+    )
+}
+
+/// [`build_volume`] for any piece of the group (a component or a chunk): triangles outside the
+/// piece count as not facing, so its cut edges close its volume.
+pub fn build_volume_of(
+    group: &CasterGroup,
+    comp: &Component,
+    light: DVec3,
+    s: &VolumeSettings,
+    with_caps: bool,
+    cull: Option<ReceiverCull>,
+) -> VolumeMesh {
     let c = &group.connectivity;
-    let comp = &group.components[component];
     let pos = |i: u32| c.positions[i as usize].as_dvec3();
-    let facing = facing_flags(group, component, light, s.facing_epsilon);
+    let mut facing = facing_flags_of(group, comp, light, s.facing_epsilon);
+    let mut culled = 0;
+    if let Some(rc) = cull {
+        let l = light.as_vec3();
+        let piece_shadow = shadow_bounds(&comp.bounds, l, rc.radius);
+        let near: Vec<&Aabb> = rc
+            .boxes
+            .iter()
+            .filter(|b| b.intersects(&piece_shadow))
+            .collect();
+        for &t in &comp.triangles {
+            if facing[t as usize] && !shadow_reaches(c, t as usize, l, rc.radius, &near) {
+                facing[t as usize] = false;
+                culled += 1;
+            }
+        }
+    }
     let facing_list: Vec<u32> = comp
         .triangles
         .iter()
@@ -298,6 +501,7 @@ pub fn build_volume(
         .collect();
     let mut mesh = VolumeMesh {
         facing: facing_list.len(),
+        culled,
         ..VolumeMesh::default()
     };
     let quad = |a: u32, b: u32, out: &mut Vec<[f32; 4]>| {
@@ -306,7 +510,15 @@ pub fn build_volume(
         let (pa, pb) = (pos(a), pos(b));
         let (ea, eb) = (extrude(pa, light, s), extrude(pb, light, s));
         let (va, vb) = ([pa.x, pa.y, pa.z, 1.0], [pb.x, pb.y, pb.z, 1.0]);
-        for v in [vb, va, ea, vb, ea, eb] {
+        // The diagonal runs from the lower vertex index's point to the other's extrusion, so
+        // that the two opposite quads of an edge between pieces (chunks) are the same triangles
+        // and cancel pixel for pixel.
+        let triangles = if a < b {
+            [vb, va, eb, va, ea, eb]
+        } else {
+            [vb, va, ea, vb, ea, eb]
+        };
+        for v in triangles {
             out.push(to_f32(v));
         }
     };

@@ -17,6 +17,16 @@ use std::sync::Arc;
 /// Frame times kept for the graph.
 pub const HISTORY: usize = 240;
 
+/// The technique keys' cycle: none, shadow map, shadow volume, auto.
+fn next_technique(t: Technique) -> Technique {
+    match t {
+        Technique::None => Technique::ShadowMap,
+        Technique::ShadowMap => Technique::ShadowVolume,
+        Technique::ShadowVolume => Technique::Auto,
+        Technique::Auto => Technique::None,
+    }
+}
+
 /// Scene edits from the panel.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Action {
@@ -162,6 +172,8 @@ impl ViewerState {
                 light: Some(self.selected_light),
                 ..self.overlays
             },
+            // The timings overlay shows each pass.
+            frame_only: false,
         }
     }
 
@@ -195,11 +207,7 @@ impl ViewerState {
         if i >= self.scene.lights.len() {
             return;
         }
-        let next = match self.options.technique_for(i) {
-            Technique::None => Technique::ShadowMap,
-            Technique::ShadowMap => Technique::ShadowVolume,
-            Technique::ShadowVolume => Technique::None,
-        };
+        let next = next_technique(self.options.technique_for(i));
         let over = (next != self.options.technique).then_some(next);
         self.options.set_technique_for(i, over);
         self.status = format!("light {i}: {next}");
@@ -207,11 +215,7 @@ impl ViewerState {
 
     /// The global technique's next value (lights without an override follow it).
     pub fn cycle_technique(&mut self) {
-        self.options.technique = match self.options.technique {
-            Technique::None => Technique::ShadowMap,
-            Technique::ShadowMap => Technique::ShadowVolume,
-            Technique::ShadowVolume => Technique::None,
-        };
+        self.options.technique = next_technique(self.options.technique);
         self.status = format!("technique: {}", self.options.technique);
     }
 
@@ -480,6 +484,7 @@ mod tests {
         assert_eq!(s.options.lighting.techniques, "0:shadow_volume");
         s.cycle_light_technique(0);
         s.cycle_light_technique(0);
+        s.cycle_light_technique(0);
         assert_eq!(s.options.technique_for(0), Technique::ShadowMap);
         assert_eq!(s.options.lighting.techniques, "");
     }
@@ -491,6 +496,7 @@ mod tests {
             kind,
             light: None,
             face: None,
+            technique: None,
         };
         s.frame_done(
             1.0,

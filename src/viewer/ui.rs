@@ -25,7 +25,7 @@ pub const HELP: &[(&str, &str)] = &[
     ("drag in the view", "look around"),
     (
         "1 - 9",
-        "cycle light 1-9's technique: none, shadow map, shadow volume",
+        "cycle light 1-9's technique: none, shadow map, shadow volume, auto",
     ),
     ("0", "cycle the technique of every light without its own"),
     ("Tab", "select the next light"),
@@ -485,6 +485,30 @@ fn timings(ui: &mut egui::Ui, state: &ViewerState, frame: &Frame) {
         "lights drawn {lights_on} of {}",
         state.scene.lights.len()
     ));
+    ui.label(format!(
+        "planner: {} lights planned, {} culled (frustum {}, PVS {}), {} without casters",
+        p.lights_planned,
+        p.lights_culled_frustum + p.lights_culled_pvs,
+        p.lights_culled_frustum,
+        p.lights_culled_pvs,
+        p.lights_without_casters
+    ));
+    ui.label(format!(
+        "casters {} drawn, {} culled; receivers {} drawn, {} culled; scissor {:.0}% of the frame",
+        p.casters_drawn,
+        p.casters_culled,
+        p.receivers_drawn,
+        p.receivers_culled,
+        100.0 * p.scissor_fraction
+    ));
+    let c = &frame.cache;
+    ui.label(format!(
+        "cache: maps {} reused, {} drawn; volume parts {} reused, {} built",
+        c.maps_reused, c.maps_rendered, c.volume_parts_reused, c.volume_parts_built
+    ));
+    for choice in &p.choices {
+        ui.label(format!("auto: {choice}"));
+    }
     if !frame.volumes.is_empty() {
         let quads: usize = frame.volumes.iter().map(|v| v.quads).sum();
         let caps: usize = frame.volumes.iter().map(|v| v.cap_triangles).sum();

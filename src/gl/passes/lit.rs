@@ -21,6 +21,8 @@ pub struct ShadowBinding<'a> {
 pub enum LitShadow<'a> {
     None,
     Map(&'a ShadowBinding<'a>),
+    /// An omni light's six spot maps in one pass (the `SIX_SPOTS` program).
+    Faces(&'a [&'a ShadowBinding<'a>]),
     /// The stencil counts of this light's volumes; `test` = light only where the count is 0
     /// (off for the fill-quad shading, which darkens afterwards).
     Stencil {
@@ -63,7 +65,7 @@ fn bind_light(ctx: &PassContext, program: &Program, lp: &LightPlan, shadow: &Lit
         match (
             offset_for(o, lp.order),
             o.offset_pass,
-            matches!(shadow, LitShadow::Map(_)),
+            matches!(shadow, LitShadow::Map(_) | LitShadow::Faces(_)),
         ) {
             // The paper's lit-pass offset pulls the lit world toward the camera.
             (Some((factor, units)), OffsetPass::Lit | OffsetPass::Both, true) => {
@@ -75,6 +77,27 @@ fn bind_light(ctx: &PassContext, program: &Program, lp: &LightPlan, shadow: &Lit
         for i in 0..4 {
             gl.disable(glow::CLIP_DISTANCE0 + i);
         }
+    }
+    if let LitShadow::Faces(maps) = shadow {
+        let camera_view = ctx.plan.camera.view;
+        program.set_mat4(gl, "u_view", &camera_view);
+        program.set_f32(gl, "u_map_size", o.size as f32);
+        program.set_i32(gl, "u_pcf_size", o.pcf_size as i32);
+        program.set_i32(gl, "u_sm_alpha_func", o.alpha_func as i32);
+        program.set_f32(gl, "u_sm_alpha_ref", o.alpha_ref);
+        program.set_i32(gl, "u_face", -1);
+        for (i, m) in maps.iter().enumerate() {
+            program.set_mat4(gl, &format!("u_texgens[{i}]"), &m.view.texgen(&camera_view));
+            program.set_i32(gl, &format!("u_face_maps[{i}]"), 1 + i as i32);
+            // SAFETY: binds our depth textures to units 1-6.
+            unsafe {
+                gl.active_texture(glow::TEXTURE1 + i as u32);
+                gl.bind_texture(glow::TEXTURE_2D, Some(m.texture));
+            }
+        }
+        // SAFETY: back to unit 0 for the material textures.
+        unsafe { gl.active_texture(glow::TEXTURE0) };
+        return;
     }
     let LitShadow::Map(s) = shadow else { return };
     let camera_view = ctx.plan.camera.view;
@@ -116,14 +139,6 @@ fn bind_light(ctx: &PassContext, program: &Program, lp: &LightPlan, shadow: &Lit
     }
 }
 
-/// Receiving surfaces in view.
-fn receivers(ctx: &PassContext) -> Vec<crate::gl::upload::DrawItem> {
-    let scene = ctx.scene;
-    ctx.gpu.draw_list(scene, |s| {
-        ctx.plan.visible[s] && scene.materials[scene.surfaces[s].material].receives_light
-    })
-}
-
 /// Depth state shared by the lit pass and its mask: test against the unlit pass, never write.
 fn depth_state(gl: &glow::Context) {
     // SAFETY: fixed-function state.
@@ -156,8 +171,15 @@ fn finish(gl: &glow::Context) {
     }
 }
 
-/// Adds the light's contribution where the depth equals the unlit pass's.
-pub fn draw(ctx: &PassContext, program: &Program, lp: &LightPlan, shadow: &LitShadow) {
+/// Adds the light's contribution to `receivers` (the plan's surfaces for this light or view)
+/// where the depth equals the unlit pass's.
+pub fn draw(
+    ctx: &PassContext,
+    program: &Program,
+    lp: &LightPlan,
+    shadow: &LitShadow,
+    receivers: &[u32],
+) {
     let gl = ctx.gl;
     depth_state(gl);
     if let LitShadow::Stencil { test: true } = shadow {
@@ -170,13 +192,24 @@ pub fn draw(ctx: &PassContext, program: &Program, lp: &LightPlan, shadow: &LitSh
         gl.blend_func(glow::ONE, glow::ONE);
     }
     bind_light(ctx, program, lp, shadow);
-    draw_items(ctx, program, &receivers(ctx), |_| {});
+    draw_items(
+        ctx,
+        program,
+        &ctx.gpu.draw_list_of(ctx.scene, receivers),
+        |_| {},
+    );
     finish(gl);
 }
 
 /// Writes the light's decision into the bound mask target (cleared to "not a receiver"). Under
 /// shadow volumes the stencil decides: count 0 is lit, any other count shadowed.
-pub fn draw_mask(ctx: &PassContext, program: &Program, lp: &LightPlan, shadow: &LitShadow) {
+pub fn draw_mask(
+    ctx: &PassContext,
+    program: &Program,
+    lp: &LightPlan,
+    shadow: &LitShadow,
+    receivers: &[u32],
+) {
     let gl = ctx.gl;
     depth_state(gl);
     // SAFETY: fixed-function state.
@@ -185,7 +218,7 @@ pub fn draw_mask(ctx: &PassContext, program: &Program, lp: &LightPlan, shadow: &
         gl.disable(glow::BLEND);
     }
     bind_light(ctx, program, lp, shadow);
-    let items = receivers(ctx);
+    let items = ctx.gpu.draw_list_of(ctx.scene, receivers);
     if let LitShadow::Stencil { .. } = shadow {
         for (func, decision) in [(glow::EQUAL, 1), (glow::NOTEQUAL, 2)] {
             stencil_gate(gl, func);

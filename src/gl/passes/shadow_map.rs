@@ -41,16 +41,29 @@ pub fn image_target(cube_face: Option<usize>) -> u32 {
     }
 }
 
-/// Draws the casters into the light view `view_proj` (a `size`² viewport).
-pub fn render(
-    ctx: &PassContext,
-    program: &Program,
-    view_proj: &Mat4,
-    size: u32,
-    target: &DepthTarget,
-    cube_face: Option<usize>,
-    order: usize,
-) {
+/// One light view to draw into a map.
+pub struct MapView<'a> {
+    pub view_proj: Mat4,
+    /// The map's side in texels (the viewport).
+    pub size: u32,
+    /// The cube face drawn into (cube maps).
+    pub cube_face: Option<usize>,
+    /// The light's position among the frame's lights (the paper's offset growth).
+    pub order: usize,
+    /// The plan's casters for this view; `None` draws every caster.
+    pub casters: Option<&'a [u32]>,
+}
+
+/// Draws the view's casters into `target`.
+pub fn render(ctx: &PassContext, program: &Program, view: &MapView, target: &DepthTarget) {
+    let MapView {
+        view_proj,
+        size,
+        cube_face,
+        order,
+        casters,
+    } = *view;
+    let view_proj = &view_proj;
     let gl = ctx.gl;
     let o = &ctx.options.shadow_map;
     // SAFETY: fixed-function state and a depth attachment of our own texture.
@@ -92,7 +105,11 @@ pub fn render(
     program.bind(gl);
     program.set_mat4(gl, "u_view_proj", view_proj);
     program.set_i32(gl, "u_texture", 0);
-    let items = ctx.gpu.draw_list(ctx.scene, |s| ctx.plan.casters[s]);
+    // The plan's casters for this view, or every caster.
+    let items = match casters {
+        Some(list) => ctx.gpu.draw_list_of(ctx.scene, list),
+        None => ctx.gpu.draw_list(ctx.scene, |s| ctx.plan.casters[s]),
+    };
     // Back faces instead of front faces (thesis 2.2.8) flips every one-sided material's culling.
     let faces = o.cull;
     let cull = move |c: Cull| match (faces, c) {

@@ -19,6 +19,9 @@ pub struct Lab<'a> {
     pub name: String,
     /// The scene's options at the report's size.
     pub base: Options,
+    /// Assignments every measurement of this lab carries (and its commands print): the paper's
+    /// frame.
+    fixed: Vec<&'static str>,
     pub quick: bool,
     out: &'a Path,
     bar: &'a ProgressBar,
@@ -50,6 +53,7 @@ impl<'a> Lab<'a> {
             scene,
             name: name.to_string(),
             base,
+            fixed: super::PAPER_FRAME.to_vec(),
             quick: settings.quick,
             out,
             bar,
@@ -74,7 +78,7 @@ impl<'a> Lab<'a> {
     /// The scene's options with `KEY=VALUE` assignments applied.
     pub fn options(&self, sets: &[&str]) -> Result<Options, ReproduceError> {
         let mut o = self.base.clone();
-        for s in sets {
+        for s in self.fixed.iter().chain(sets) {
             o.set_assignment(s)?;
         }
         o.validate()?;
@@ -141,7 +145,7 @@ impl<'a> Lab<'a> {
             "shadowlab render --scene assets/scenes/{}.toml --size {}x{}",
             self.name, self.base.width, self.base.height
         );
-        for a in sets {
+        for a in self.fixed.iter().chain(sets) {
             s.push_str(&format!(" --set {a}"));
         }
         s.push_str(" --mask masks/");
@@ -154,7 +158,7 @@ impl<'a> Lab<'a> {
             "shadowlab bench --scene assets/scenes/{}.toml --size {}x{}",
             self.name, self.base.width, self.base.height
         );
-        for a in sets {
+        for a in self.fixed.iter().chain(sets) {
             s.push_str(&format!(" --set {a}"));
         }
         s.push_str(&format!(" --sweep {sweep}"));

@@ -5,6 +5,9 @@
 //! The run is organised by scene (each scene is loaded once and its exact reference masks are
 //! reused by every configuration); the sections are then put in the paper's order. Every
 //! number in the report comes from this run; the paper's numbers are quoted as such.
+//!
+//! Everything is measured on the paper's frame (`plan.enabled = false`: every light, every
+//! caster, the counting it asks for), except the sweeps' rows named "planner".
 
 mod claims;
 mod figures;
@@ -13,6 +16,9 @@ mod page;
 mod pareto;
 
 pub use lab::{Lab, pct};
+
+/// What the paper's figures and claims are measured with: its frame, without the planner.
+const PAPER_FRAME: &[&str] = &["plan.enabled=false"];
 
 use super::bench::BenchRow;
 use super::table::Table;

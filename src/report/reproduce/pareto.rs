@@ -1,5 +1,6 @@
-//! Accuracy against time on one scene: every technique with its main toggles, a plot, and the
-//! configurations no other beats in both time and error (the Pareto front).
+//! Accuracy against time on one scene: every technique with its main toggles on the paper's
+//! frame, the same with the planner, a plot, and the configurations no other beats in both time
+//! and error (the Pareto front).
 
 use super::lab::{Lab, pct};
 use super::{Figure, ReproduceError, Section};
@@ -11,6 +12,8 @@ use crate::report::table::{Align, Table, bench_table};
 fn configs(quick: bool) -> Vec<(&'static str, Vec<&'static str>)> {
     const SM: &str = "technique=shadow_map";
     const SV: &str = "technique=shadow_volume";
+    // The lab measures the paper's frame; these rows switch the planner back on.
+    const PLANNER: &str = "plan.enabled=true";
     if quick {
         return vec![
             ("shadows off", vec!["technique=none"]),
@@ -26,6 +29,8 @@ fn configs(quick: bool) -> Vec<(&'static str, Vec<&'static str>)> {
             ),
             ("SV z-fail (paper)", vec![SV]),
             ("SV z-pass", vec![SV, "shadow_volume.counting=zpass"]),
+            ("SM 512 planner", vec![SM, PLANNER]),
+            ("SV planner", vec![SV, PLANNER]),
         ];
     }
     vec![
@@ -52,6 +57,13 @@ fn configs(quick: bool) -> Vec<(&'static str, Vec<&'static str>)> {
             "SV signed edges",
             vec![SV, "shadow_volume.edge_rule=signed"],
         ),
+        ("SM 512 planner", vec![SM, PLANNER]),
+        ("SV planner", vec![SV, PLANNER]),
+        (
+            "SV planner signed edges",
+            vec![SV, PLANNER, "shadow_volume.edge_rule=signed"],
+        ),
+        ("auto planner", vec!["technique=auto", PLANNER]),
     ]
 }
 
@@ -192,6 +204,8 @@ mod tests {
             },
             error_per_light: Vec::new(),
             volumes: Vec::new(),
+            plan: Default::default(),
+            cache: Default::default(),
         }
     }
 

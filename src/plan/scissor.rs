@@ -1,0 +1,152 @@
+//! A light's screen rectangle: where its range can land on screen, for glScissor around its
+//! stencil and lit passes.
+
+use super::CameraSetup;
+use super::cull::range_box;
+use glam::Vec3;
+use serde::Serialize;
+
+/// A pixel rectangle in GL window coordinates (origin bottom left).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+pub struct Scissor {
+    pub x: i32,
+    pub y: i32,
+    pub width: i32,
+    pub height: i32,
+}
+
+impl Scissor {
+    pub fn area(&self) -> u64 {
+        self.width.max(0) as u64 * self.height.max(0) as u64
+    }
+
+    pub fn full(camera: &CameraSetup) -> Scissor {
+        Scissor {
+            x: 0,
+            y: 0,
+            width: camera.width as i32,
+            height: camera.height as i32,
+        }
+    }
+}
+
+/// The rectangle holding the projection of the ball (`center`, `radius`), one pixel wider on
+/// each side; the whole screen when the ball reaches the camera's near plane (its projection is
+/// then unbounded); None when it is wholly off screen.
+pub fn sphere_scissor(camera: &CameraSetup, center: Vec3, radius: f32) -> Option<Scissor> {
+    points_scissor(camera, &range_box(center, radius).corners())
+}
+
+/// The rectangle holding the projection of the convex hull of `points` (see
+/// [`sphere_scissor`]).
+pub fn points_scissor(camera: &CameraSetup, points: &[Vec3]) -> Option<Scissor> {
+    let full = Scissor::full(camera);
+    let mut lo = glam::Vec2::splat(f32::MAX);
+    let mut hi = glam::Vec2::splat(f32::MIN);
+    for c in points {
+        let clip = camera.view_proj * c.extend(1.0);
+        // Behind or on the near plane: the projection wraps around; keep everything.
+        if clip.w <= 1e-4 || clip.z < -clip.w {
+            return Some(full);
+        }
+        let ndc = glam::Vec2::new(clip.x, clip.y) / clip.w;
+        lo = lo.min(ndc);
+        hi = hi.max(ndc);
+    }
+    if hi.x < -1.0 || hi.y < -1.0 || lo.x > 1.0 || lo.y > 1.0 {
+        return None;
+    }
+    let (w, h) = (camera.width as f32, camera.height as f32);
+    let x0 = (((lo.x.max(-1.0) * 0.5 + 0.5) * w).floor() as i32 - 1).max(0);
+    let y0 = (((lo.y.max(-1.0) * 0.5 + 0.5) * h).floor() as i32 - 1).max(0);
+    let x1 = (((hi.x.min(1.0) * 0.5 + 0.5) * w).ceil() as i32 + 1).min(full.width);
+    let y1 = (((hi.y.min(1.0) * 0.5 + 0.5) * h).ceil() as i32 + 1).min(full.height);
+    Some(Scissor {
+        x: x0,
+        y: y0,
+        width: (x1 - x0).max(0),
+        height: (y1 - y0).max(0),
+    })
+}
+
+impl Scissor {
+    /// The overlap of two rectangles (possibly empty).
+    pub fn intersect(&self, o: &Scissor) -> Scissor {
+        let x0 = self.x.max(o.x);
+        let y0 = self.y.max(o.y);
+        let x1 = (self.x + self.width).min(o.x + o.width);
+        let y1 = (self.y + self.height).min(o.y + o.height);
+        Scissor {
+            x: x0,
+            y: y0,
+            width: (x1 - x0).max(0),
+            height: (y1 - y0).max(0),
+        }
+    }
+}
+
+/// The part of the screen an omni light's cube face `f` can light within `radius`: its pyramid
+/// within the ball lies in the hull of the light and the face's square at distance `radius`.
+pub fn face_scissor(camera: &CameraSetup, light: Vec3, radius: f32, f: usize) -> Option<Scissor> {
+    let axes = [Vec3::X, -Vec3::X, Vec3::Y, -Vec3::Y, Vec3::Z, -Vec3::Z];
+    let a = axes[f.min(5)];
+    let (u, v) = match f / 2 {
+        0 => (Vec3::Y, Vec3::Z),
+        1 => (Vec3::X, Vec3::Z),
+        _ => (Vec3::X, Vec3::Y),
+    };
+    let mut points = vec![light];
+    for (su, sv) in [(1.0, 1.0), (1.0, -1.0), (-1.0, 1.0), (-1.0, -1.0)] {
+        points.push(light + radius * (a + su * u + sv * v));
+    }
+    points_scissor(camera, &points)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::scene::Camera;
+
+    fn camera() -> CameraSetup {
+        CameraSetup::new(
+            &Camera::looking_at(Vec3::ZERO, Vec3::new(100.0, 0.0, 0.0)),
+            640,
+            480,
+        )
+    }
+
+    #[test]
+    fn a_ball_ahead_gets_a_rectangle_holding_its_projection() {
+        let c = camera();
+        let center = Vec3::new(200.0, 0.0, 0.0);
+        let s = sphere_scissor(&c, center, 20.0).unwrap();
+        assert!(s.area() > 0 && s.area() < 640 * 480 / 4, "{s:?}");
+        // Every point of the ball's surface projects inside.
+        for i in 0..200 {
+            let a = i as f32 * 0.7;
+            let b = i as f32 * 1.3;
+            let p = center + 20.0 * Vec3::new(a.cos() * b.sin(), a.sin() * b.sin(), b.cos());
+            let clip = c.view_proj * p.extend(1.0);
+            let x = (clip.x / clip.w * 0.5 + 0.5) * 640.0;
+            let y = (clip.y / clip.w * 0.5 + 0.5) * 480.0;
+            assert!(x >= s.x as f32 && x <= (s.x + s.width) as f32, "{x} {s:?}");
+            assert!(y >= s.y as f32 && y <= (s.y + s.height) as f32, "{y} {s:?}");
+        }
+    }
+
+    #[test]
+    fn balls_around_the_camera_take_the_screen_and_balls_behind_none() {
+        let c = camera();
+        assert_eq!(
+            sphere_scissor(&c, Vec3::new(5.0, 0.0, 0.0), 50.0),
+            Some(Scissor::full(&c))
+        );
+        // Behind the camera the projection is not bounded: the whole screen (the frustum test,
+        // which runs first, culls such lights).
+        assert_eq!(
+            sphere_scissor(&c, Vec3::new(-500.0, 0.0, 0.0), 50.0),
+            Some(Scissor::full(&c))
+        );
+        assert_eq!(sphere_scissor(&c, Vec3::new(100.0, 900.0, 0.0), 50.0), None);
+    }
+}
