@@ -1,52 +1,32 @@
 //! Reading buffers back as images for the debug views and the walkthrough: depth (of the frame
 //! or a shadow map) as grey, stencil counts as a heat map.
 
-use super::target::flip_rows;
+use super::target::{flip_rows, read_pixels};
 use crate::frame::Rgba;
 use glow::HasContext;
 
 /// The depth values of a framebuffer's `w`×`h` corner, top row first.
 pub fn read_depth(gl: &glow::Context, fbo: glow::Framebuffer, w: u32, h: u32) -> Vec<f32> {
-    let mut data = vec![0f32; (w * h) as usize];
-    // SAFETY: `data` holds exactly w*h floats; the framebuffer has a depth attachment.
-    unsafe {
-        gl.bind_framebuffer(glow::READ_FRAMEBUFFER, Some(fbo));
-        gl.pixel_store_i32(glow::PACK_ALIGNMENT, 4);
-        gl.read_pixels(
-            0,
-            0,
-            w as i32,
-            h as i32,
-            glow::DEPTH_COMPONENT,
-            glow::FLOAT,
-            glow::PixelPackData::Slice(Some(bytes_of_mut(&mut data))),
-        );
-        gl.bind_framebuffer(glow::READ_FRAMEBUFFER, None);
-    }
-    flip_rows(&mut data, w as usize);
-    data
+    read_pixels(
+        gl,
+        Some(fbo),
+        None,
+        (w, h),
+        (glow::DEPTH_COMPONENT, glow::FLOAT),
+        1,
+    )
 }
 
 /// The stencil values of a framebuffer's `w`×`h` corner, top row first.
 pub fn read_stencil(gl: &glow::Context, fbo: glow::Framebuffer, w: u32, h: u32) -> Vec<u8> {
-    let mut data = vec![0u8; (w * h) as usize];
-    // SAFETY: `data` holds exactly w*h bytes (pack alignment 1); the framebuffer has stencil.
-    unsafe {
-        gl.bind_framebuffer(glow::READ_FRAMEBUFFER, Some(fbo));
-        gl.pixel_store_i32(glow::PACK_ALIGNMENT, 1);
-        gl.read_pixels(
-            0,
-            0,
-            w as i32,
-            h as i32,
-            glow::STENCIL_INDEX,
-            glow::UNSIGNED_BYTE,
-            glow::PixelPackData::Slice(Some(&mut data)),
-        );
-        gl.bind_framebuffer(glow::READ_FRAMEBUFFER, None);
-    }
-    flip_rows(&mut data, w as usize);
-    data
+    read_pixels(
+        gl,
+        Some(fbo),
+        None,
+        (w, h),
+        (glow::STENCIL_INDEX, glow::UNSIGNED_BYTE),
+        1,
+    )
 }
 
 /// A depth texture's texels (one cube face when `face` is given), top row first.

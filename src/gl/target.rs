@@ -140,26 +140,14 @@ impl Framebuffer {
 
     /// The colour attachment, top row first (GL's rows are bottom-up).
     pub fn read_rgba(&self, gl: &glow::Context) -> Vec<u8> {
-        let (w, h) = (self.width as usize, self.height as usize);
-        let mut data = vec![0u8; w * h * 4];
-        // SAFETY: `data` holds exactly w*h RGBA8 pixels; pack alignment 1 avoids row padding.
-        unsafe {
-            gl.bind_framebuffer(glow::READ_FRAMEBUFFER, Some(self.fbo));
-            gl.read_buffer(glow::COLOR_ATTACHMENT0);
-            gl.pixel_store_i32(glow::PACK_ALIGNMENT, 1);
-            gl.read_pixels(
-                0,
-                0,
-                w as i32,
-                h as i32,
-                glow::RGBA,
-                glow::UNSIGNED_BYTE,
-                glow::PixelPackData::Slice(Some(&mut data)),
-            );
-            gl.bind_framebuffer(glow::READ_FRAMEBUFFER, None);
-        }
-        flip_rows(&mut data, w * 4);
-        data
+        read_pixels(
+            gl,
+            Some(self.fbo),
+            Some(glow::COLOR_ATTACHMENT0),
+            (self.width, self.height),
+            (glow::RGBA, glow::UNSIGNED_BYTE),
+            4,
+        )
     }
 
     pub fn delete(&self, gl: &glow::Context) {
@@ -170,6 +158,47 @@ impl Framebuffer {
             gl.delete_texture(self.depth_stencil);
         }
     }
+}
+
+/// Reads the `w`×`h` corner of `fbo` (None: the default framebuffer) from colour buffer
+/// `buffer` (None: the depth or stencil the format names) into a buffer of `T`, top row first
+/// (GL's rows are bottom-up). `T` must be plain data whose size is one pixel of `format`/`ty`
+/// or a whole multiple of it.
+pub fn read_pixels<T: Copy + Default>(
+    gl: &glow::Context,
+    fbo: Option<glow::Framebuffer>,
+    buffer: Option<u32>,
+    (w, h): (u32, u32),
+    (format, ty): (u32, u32),
+    per_pixel: usize,
+) -> Vec<T> {
+    let (w, h) = (w as usize, h as usize);
+    let mut data = vec![T::default(); w * h * per_pixel];
+    // SAFETY: `data` holds w*h pixels of `format`/`ty` (the caller's `per_pixel` values of T
+    // each, T plain data); pack alignment 1 avoids row padding.
+    unsafe {
+        let bytes = std::slice::from_raw_parts_mut(
+            data.as_mut_ptr() as *mut u8,
+            std::mem::size_of_val(data.as_slice()),
+        );
+        gl.bind_framebuffer(glow::READ_FRAMEBUFFER, fbo);
+        if let Some(b) = buffer {
+            gl.read_buffer(b);
+        }
+        gl.pixel_store_i32(glow::PACK_ALIGNMENT, 1);
+        gl.read_pixels(
+            0,
+            0,
+            w as i32,
+            h as i32,
+            format,
+            ty,
+            glow::PixelPackData::Slice(Some(bytes)),
+        );
+        gl.bind_framebuffer(glow::READ_FRAMEBUFFER, None);
+    }
+    flip_rows(&mut data, w * per_pixel);
+    data
 }
 
 /// Reverses the order of rows of `row_bytes` bytes each.
@@ -312,32 +341,14 @@ impl GBufferTarget {
 
     /// Reads one RGBA32F attachment, top row first.
     pub fn read(&self, gl: &glow::Context, attachment: usize) -> Vec<[f32; 4]> {
-        let (w, h) = (self.width as usize, self.height as usize);
-        let mut data = vec![0f32; w * h * 4];
-        // SAFETY: `data` holds w*h RGBA32F texels.
-        unsafe {
-            gl.bind_framebuffer(glow::READ_FRAMEBUFFER, Some(self.fbo));
-            gl.read_buffer(glow::COLOR_ATTACHMENT0 + attachment as u32);
-            gl.pixel_store_i32(glow::PACK_ALIGNMENT, 4);
-            let bytes =
-                std::slice::from_raw_parts_mut(data.as_mut_ptr() as *mut u8, data.len() * 4);
-            gl.read_pixels(
-                0,
-                0,
-                w as i32,
-                h as i32,
-                glow::RGBA,
-                glow::FLOAT,
-                glow::PixelPackData::Slice(Some(bytes)),
-            );
-            gl.bind_framebuffer(glow::READ_FRAMEBUFFER, None);
-        }
-        let mut texels: Vec<[f32; 4]> = data
-            .chunks_exact(4)
-            .map(|c| [c[0], c[1], c[2], c[3]])
-            .collect();
-        flip_rows(&mut texels, w);
-        texels
+        read_pixels(
+            gl,
+            Some(self.fbo),
+            Some(glow::COLOR_ATTACHMENT0 + attachment as u32),
+            (self.width, self.height),
+            (glow::RGBA, glow::FLOAT),
+            1,
+        )
     }
 
     pub fn delete(&self, gl: &glow::Context) {
@@ -414,26 +425,14 @@ impl MaskTarget {
 
     /// The mask, top row first.
     pub fn read(&self, gl: &glow::Context) -> Vec<u8> {
-        let (w, h) = (self.width as usize, self.height as usize);
-        let mut data = vec![0u8; w * h];
-        // SAFETY: `data` holds w*h R8 texels; pack alignment 1.
-        unsafe {
-            gl.bind_framebuffer(glow::READ_FRAMEBUFFER, Some(self.fbo));
-            gl.read_buffer(glow::COLOR_ATTACHMENT0);
-            gl.pixel_store_i32(glow::PACK_ALIGNMENT, 1);
-            gl.read_pixels(
-                0,
-                0,
-                w as i32,
-                h as i32,
-                glow::RED,
-                glow::UNSIGNED_BYTE,
-                glow::PixelPackData::Slice(Some(&mut data)),
-            );
-            gl.bind_framebuffer(glow::READ_FRAMEBUFFER, None);
-        }
-        flip_rows(&mut data, w);
-        data
+        read_pixels(
+            gl,
+            Some(self.fbo),
+            Some(glow::COLOR_ATTACHMENT0),
+            (self.width, self.height),
+            (glow::RED, glow::UNSIGNED_BYTE),
+            1,
+        )
     }
 
     pub fn delete(&self, gl: &glow::Context) {

@@ -85,27 +85,17 @@ fn show(ctx: &egui::Context, slot: &mut Option<egui::TextureHandle>, name: &str,
 
 /// The window's back buffer as an image (what the screen shows after the swap).
 fn read_window(gl: &glow::Context, width: u32, height: u32) -> Rgba {
-    let mut data = vec![0u8; (width * height * 4) as usize];
-    // SAFETY: the default framebuffer is bound for reading; `data` holds width*height RGBA8.
-    unsafe {
-        gl.bind_framebuffer(glow::READ_FRAMEBUFFER, None);
-        gl.read_buffer(glow::BACK);
-        gl.pixel_store_i32(glow::PACK_ALIGNMENT, 1);
-        gl.read_pixels(
-            0,
-            0,
-            width as i32,
-            height as i32,
-            glow::RGBA,
-            glow::UNSIGNED_BYTE,
-            glow::PixelPackData::Slice(Some(&mut data)),
-        );
-    }
-    crate::gl::target::flip_rows(&mut data, (width * 4) as usize);
     Rgba {
         width,
         height,
-        data,
+        data: crate::gl::target::read_pixels(
+            gl,
+            None,
+            Some(glow::BACK),
+            (width, height),
+            (glow::RGBA, glow::UNSIGNED_BYTE),
+            4,
+        ),
     }
 }
 
