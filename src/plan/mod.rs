@@ -266,6 +266,14 @@ impl Plan {
             .filter(|&i| casters[i])
             .map(|i| i as u32)
             .collect();
+        // Alpha-tested casters: `auto` and the counting choice treat them apart (once per
+        // frame, not per light).
+        let alpha_caster_bounds: Vec<Aabb> = caster_list
+            .iter()
+            .map(|&c| &scene.surfaces[c as usize])
+            .filter(|s| scene.materials[s.material].alpha_test.is_some())
+            .map(|s| s.bounds)
+            .collect();
         let caster_bounds: Vec<Aabb> = if may(Technique::ShadowMap) {
             caster_list
                 .iter()
@@ -358,11 +366,9 @@ impl Plan {
 
             // The technique: asked for, or chosen.
             let alpha_casters = || {
-                caster_list.iter().any(|&c| {
-                    let s = &scene.surfaces[c as usize];
-                    scene.materials[s.material].alpha_test.is_some()
-                        && cull::sphere_meets_aabb(pos, radius, &s.bounds)
-                })
+                alpha_caster_bounds
+                    .iter()
+                    .any(|b| cull::sphere_meets_aabb(pos, radius, b))
             };
             let (mut technique, mut reason) = match options.technique_for(index) {
                 Technique::Auto => {
@@ -495,12 +501,6 @@ impl Plan {
                         CountingMode::Zfail => on && p.counting,
                         CountingMode::Zpass => false,
                     };
-                    let alpha_casters_boxes: Vec<Aabb> = caster_list
-                        .iter()
-                        .map(|&c| &scene.surfaces[c as usize])
-                        .filter(|s| scene.materials[s.material].alpha_test.is_some())
-                        .map(|s| s.bounds)
-                        .collect();
                     // Receiver boxes: a piece whose shadow meets none of them shadows nothing
                     // in view (Forsyth).
                     let receiver_boxes: Vec<Aabb> = plan
@@ -524,7 +524,7 @@ impl Plan {
                             // A ray seen through an alpha-tested caster's holes enters its
                             // volume through the front cap, which depth-pass does not draw.
                             if volume::potentially_inside_shadow(&bounds, eye, pos, near)
-                                || alpha_casters_boxes.iter().any(|b| b.intersects(&bounds))
+                                || alpha_caster_bounds.iter().any(|b| b.intersects(&bounds))
                             {
                                 Counting::ZFail
                             } else {
