@@ -157,6 +157,9 @@ fn stencil_gate(gl: &glow::Context, func: u32) {
         gl.enable(glow::STENCIL_TEST);
         gl.stencil_func(func, 0, 0xff);
         gl.stencil_op(glow::KEEP, glow::KEEP, glow::KEEP);
+        // No stencil writes: llvmpipe then tests depth and stencil before the shader runs
+        // (early test) even though the shader discards, so hidden fragments cost nothing.
+        gl.stencil_mask(0);
     }
 }
 
@@ -164,6 +167,7 @@ fn finish(gl: &glow::Context) {
     // SAFETY: state this pass enabled, switched off for the passes that do not set it.
     unsafe {
         gl.disable(glow::STENCIL_TEST);
+        gl.stencil_mask(0xff);
         gl.disable(glow::POLYGON_OFFSET_FILL);
         for i in 0..4 {
             gl.disable(glow::CLIP_DISTANCE0 + i);
