@@ -583,6 +583,18 @@ define_options! {
         cull_casters: bool = true;
         /// Scissor each light's stencil and lit passes to its range's screen rectangle.
         scissor: bool = true;
+        /// Scissor each shadow-volume piece's stencil draw to the screen rectangle of the
+        /// receiver boxes its shadow can reach (needs `cull_casters`, which finds them): a
+        /// closed piece changes no count outside the receivers it shadows.
+        piece_scissor: bool = true;
+        /// End each shadow-volume piece just past the receivers its shadow can reach (a far
+        /// cap, drawn under depth-pass too) instead of at infinity (needs `cull_casters`):
+        /// the volume's fragments behind those receivers are never rasterised.
+        truncate_volumes: bool = true;
+        /// Read the depth buffer back after the base pass and leave out of the shadow-volume
+        /// work every receiver whose box it hides wholly (a max-depth pyramid, as a GPU's
+        /// hierarchical Z): casters that shadow only hidden receivers drop out.
+        occlusion: bool = true;
         /// Under `shadow_volume.counting = zfail`, count depth-pass, without caps, each caster
         /// piece whose shadow cannot hold the camera (Doom 3's test) and that is not
         /// alpha-tested, depth-fail the others (as `counting = auto`; `zpass` stays `zpass`).

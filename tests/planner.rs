@@ -136,6 +136,7 @@ struct Saved {
 const VOLUMES_SAME: &[&str] = &[
     "technique=shadow_volume",
     "plan.counting=false",
+    "plan.truncate_volumes=false",
     "shadow_volume.edge_rule=signed",
 ];
 
@@ -201,6 +202,50 @@ fn depth_pass_where_safe_changes_at_most_edge_pixels() {
         100.0 * share
     );
     assert!(share < 0.002, "{differing} pixels differ ({share})");
+}
+
+/// Volumes ending just past their receivers (`plan.truncate_volumes`): the same shadows but for
+/// pixels where the shorter sides, rasterised from other end points, fall differently on a
+/// pixel centre; along camera paths on the three scenes, with the caches warm.
+#[test]
+fn truncated_volumes_change_at_most_edge_pixels() {
+    let builtin = (
+        shadowlab::scene::builtin::default_scene(),
+        Options::default(),
+    );
+    let (dm1, _, dm1_options) = load_scene_file("oa_dm1");
+    let (wrack, _, wrack_options) = load_scene_file("wrackdm17");
+    for (scene, options) in [builtin, (dm1, dm1_options), (wrack, wrack_options)] {
+        let whole = with(&options, VOLUMES_SAME);
+        let truncated = with(&whole, &["plan.truncate_volumes=true"]);
+        let (_ctx, mut r) = gl_on(BackendChoice::Egl, &whole);
+        let mut t = Renderer::new(_ctx.gl.clone(), whole.width, whole.height).unwrap();
+        r.load_scene(&scene).unwrap();
+        t.load_scene(&scene).unwrap();
+        let (mut differing, mut total, mut parts) = (0, 0, 0);
+        for cam in camera_path(&scene.camera, 6, 48.0) {
+            let a = t.render_at(&scene, &cam, &truncated, masks()).unwrap();
+            let b = r.render_at(&scene, &cam, &whole, masks()).unwrap();
+            parts += a.volumes.iter().map(|v| v.parts_truncated).sum::<usize>();
+            assert_eq!(
+                b.volumes.iter().map(|v| v.parts_truncated).sum::<usize>(),
+                0
+            );
+            differing += mask_differences(&a, &b).iter().map(|d| d.1).sum::<usize>();
+            total += receivers(&b);
+        }
+        let share = differing as f64 / total.max(1) as f64;
+        eprintln!(
+            "{}: {parts} truncated parts, {differing} of {total} receiver pixels differ",
+            scene.name
+        );
+        assert!(parts > 0, "{}: nothing was truncated", scene.name);
+        assert!(
+            share < 0.00001,
+            "{}: {differing} of {total} pixels differ",
+            scene.name
+        );
+    }
 }
 
 /// The first light of `scene` whose range meets the view frustum but reaches no BSP leaf in
@@ -269,7 +314,14 @@ fn a_light_outside_the_frustum_whose_shadow_reaches_into_view_is_kept() {
         "the light is above the frustum: {clip}"
     );
     for technique in ["technique=shadow_map", "technique=shadow_volume"] {
-        let o = with(&options, &[technique, "plan.counting=false"]);
+        let o = with(
+            &options,
+            &[
+                technique,
+                "plan.counting=false",
+                "plan.truncate_volumes=false",
+            ],
+        );
         let (_ctx, mut r) = gl_on(BackendChoice::Egl, &o);
         r.load_scene(&scene).unwrap();
         let planned = r.render_with(&scene, &o, masks()).unwrap();
@@ -413,7 +465,11 @@ fn with_the_papers_edge_rule_culling_only_closes_leaks() {
     let (scene, _, options) = load_scene_file("oa_dm1");
     let paper_rule = with(
         &options,
-        &["technique=shadow_volume", "plan.counting=false"],
+        &[
+            "technique=shadow_volume",
+            "plan.counting=false",
+            "plan.truncate_volumes=false",
+        ],
     );
     let (_ctx, mut r) = gl_on(BackendChoice::Egl, &paper_rule);
     r.load_scene(&scene).unwrap();

@@ -10,13 +10,13 @@ use super::caps::{self, Caps};
 use super::debug;
 use super::passes::lit::{LitShadow, ShadowBinding};
 use super::passes::shadow_map::{DepthTarget, copies_from_frame, copy_depth};
-use super::passes::{self, PassContext};
+use super::passes::{self, PassContext, set_scissor};
 use super::program::{Program, ProgramError, sources};
 use super::shadow_maps::ShadowMaps;
 use super::target::{Framebuffer, GBufferTarget, MaskTarget};
 use super::timing::PassTimer;
 use super::upload::GpuScene;
-use super::volumes::{VolumeCache, VolumeStats};
+use super::volumes::{PieceChoices, VolumeCache, VolumeStats};
 use crate::frame::CacheStats;
 use crate::frame::{Frame, GBuffer, Mask, Rgba, StencilImage, Step, StepKind};
 use crate::options::{
@@ -24,6 +24,7 @@ use crate::options::{
     Technique, VolumeShading,
 };
 use crate::plan::auto::CostMemory;
+use crate::plan::occlusion::DepthPyramid;
 use crate::plan::scissor::Scissor;
 use crate::plan::{LightPlan, Plan};
 use crate::scene::{Camera, Scene};
@@ -630,8 +631,38 @@ impl Renderer {
             }
         }
 
-        // Shadow volumes: built on the CPU (or reused) before any drawing.
+        self.timer.begin(gl, "base");
+        self.target.bind(gl);
+        passes::base::draw(&ctx, &self.programs.unlit);
+        if stepper.record(StepKind::Base, None, None) {
+            let image = self.color_image(gl);
+            return self.stopped(gl, plan, stepper, image, Vec::new(), start);
+        }
+        // Shadow volumes: built on the CPU (or reused) once the base pass has laid down the
+        // depth that `plan.occlusion` judges receivers by.
         let mut volume_stats: Vec<VolumeStats> = Vec::new();
+        let any_volumes = plan
+            .lights
+            .iter()
+            .any(|l| l.technique == Technique::ShadowVolume);
+        let depth = if any_volumes && options.plan.enabled && options.plan.occlusion {
+            self.timer.end(gl);
+            let t = Instant::now();
+            let (w, h) = (self.target.width, self.target.height);
+            let values = debug::read_depth(gl, self.target.fbo, w, h);
+            let pyramid = DepthPyramid::from_top_down(&values, w as usize, h as usize);
+            self.timer
+                .record_cpu("occlusion", t.elapsed().as_secs_f64() * 1e3);
+            self.target.bind(gl);
+            pyramid
+        } else {
+            None
+        };
+        let pieces = PieceChoices {
+            occlusion: depth.as_ref().map(|d| (d, &plan.camera)),
+            scissor: (options.plan.enabled && options.plan.piece_scissor).then_some(&plan.camera),
+            truncate: options.plan.enabled && options.plan.truncate_volumes,
+        };
         for lp in plan
             .lights
             .iter()
@@ -639,7 +670,7 @@ impl Renderer {
         {
             let v = self
                 .volumes
-                .prepare(gl, scene, lp, &options.shadow_volume)
+                .prepare(gl, scene, lp, &options.shadow_volume, pieces)
                 .map_err(RenderError::Gl)?;
             let build_ms = if v.stats.rebuilt {
                 v.stats.build_ms
@@ -653,13 +684,6 @@ impl Renderer {
             volume_stats.push(v.stats);
         }
 
-        self.timer.begin(gl, "base");
-        self.target.bind(gl);
-        passes::base::draw(&ctx, &self.programs.unlit);
-        if stepper.record(StepKind::Base, None, None) {
-            let image = self.color_image(gl);
-            return self.stopped(gl, plan, stepper, image, volume_stats, start);
-        }
         let mut stencil_image = None;
         let lit_program = |shadow_map: bool, cube: bool, six: bool, mask: bool| {
             &self.programs.lit[&variants[&LitVariant {
@@ -698,7 +722,7 @@ impl Renderer {
             match (lp.technique, self.volumes.get(lp.light)) {
                 (Technique::ShadowVolume, Some(v)) => {
                     self.timer.begin(gl, format!("light{}.stencil", lp.light));
-                    passes::stencil::draw(&ctx, &self.programs.volume, v);
+                    passes::stencil::draw(&ctx, &self.programs.volume, v, lp.scissor);
                     let wants_stencil = request.stencil_of == Some(lp.light);
                     let stop = stepper.record(StepKind::Stencil, Some(lp), None);
                     if wants_stencil || stop {
@@ -806,7 +830,7 @@ impl Renderer {
                     set_scissor(gl, lp.scissor);
                     match (lp.technique, self.volumes.get(lp.light)) {
                         (Technique::ShadowVolume, Some(v)) => {
-                            passes::stencil::draw(&ctx, &self.programs.volume, v);
+                            passes::stencil::draw(&ctx, &self.programs.volume, v, lp.scissor);
                             passes::lit::draw_mask(
                                 &ctx,
                                 lit_program(false, false, false, true),
@@ -991,20 +1015,6 @@ fn draw_maps<'p>(
         pass(program(true, *cube, false), &LitShadow::Map(b), receivers);
     }
     set_scissor(ctx.gl, lp.scissor);
-}
-
-/// glScissor to a light's rectangle, or off.
-fn set_scissor(gl: &glow::Context, s: Option<Scissor>) {
-    // SAFETY: fixed-function state only.
-    unsafe {
-        match s {
-            Some(s) => {
-                gl.enable(glow::SCISSOR_TEST);
-                gl.scissor(s.x, s.y, s.width, s.height);
-            }
-            None => gl.disable(glow::SCISSOR_TEST),
-        }
-    }
 }
 
 fn gtarget_bind(gl: &glow::Context, t: &GBufferTarget) {

@@ -3,7 +3,9 @@
 //! caching is off.
 
 use crate::options::ShadowVolumeOptions;
-use crate::plan::{LightPlan, VolumePart};
+use crate::plan::occlusion::DepthPyramid;
+use crate::plan::scissor::{Scissor, points_scissor};
+use crate::plan::{CameraSetup, LightPlan, VolumePart};
 use crate::scene::Scene;
 use crate::shadow::volume::{self, Counting, VolumeSettings};
 use glam::Mat4;
@@ -31,6 +33,18 @@ pub struct VolumeStats {
     pub build_ms: f64,
     /// Whether this frame rebuilt any part (false: all reused from the cache).
     pub rebuilt: bool,
+    /// Parts not drawn this frame: the receivers their shadow reaches are off the light's
+    /// screen rectangle (`plan.piece_scissor`).
+    pub parts_offscreen: usize,
+    /// Receivers no volume has to reach: the depth buffer hides their boxes
+    /// (`plan.occlusion`).
+    pub receivers_hidden: usize,
+    /// Parts ending just past their receivers rather than at infinity
+    /// (`plan.truncate_volumes`).
+    pub parts_truncated: usize,
+    /// Mean share of the screen a drawn part's stencil draw is scissored to (1 without
+    /// `plan.piece_scissor`).
+    pub part_scissor_fraction: f64,
     /// Parts built this frame, and parts reused from earlier frames.
     pub parts_built: usize,
     pub parts_reused: usize,
@@ -44,12 +58,28 @@ pub struct PartRange {
     pub first: i32,
     pub sides: i32,
     pub caps: i32,
+    /// Where its stencil draw may change counts (None: the light's rectangle).
+    pub scissor: Option<Scissor>,
+}
+
+/// One draw call of the stencil pass: consecutive parts with the same counting, transform and
+/// rectangle, whose vertices follow one another in the buffer.
+#[derive(Debug, Clone, Copy)]
+pub struct VolumeDraw {
+    pub counting: Counting,
+    pub model: Mat4,
+    pub first: i32,
+    /// Sides, then (depth-fail) caps, of every part in it.
+    pub count: i32,
+    pub scissor: Option<Scissor>,
 }
 
 pub struct LightVolumes {
     pub vao: glow::VertexArray,
     vbo: glow::Buffer,
     pub parts: Vec<PartRange>,
+    /// The stencil pass's draw calls over `parts`.
+    pub draws: Vec<VolumeDraw>,
     pub stats: VolumeStats,
     /// Each part's last geometry, by (group, piece, chunked), with what it was built from.
     meshes: HashMap<(usize, usize, bool), CachedPart>,
@@ -60,6 +90,19 @@ pub struct LightVolumes {
 struct CachedPart {
     key: u64,
     mesh: volume::VolumeMesh,
+}
+
+/// The planner's per-piece decisions that need the receivers a piece's shadow reaches (known
+/// only with `plan.cull_casters`).
+#[derive(Debug, Clone, Copy, Default)]
+pub struct PieceChoices<'a> {
+    /// `plan.piece_scissor`: each part gets the screen rectangle of those receivers.
+    pub scissor: Option<&'a CameraSetup>,
+    /// `plan.truncate_volumes`: each part ends just past them.
+    pub truncate: bool,
+    /// `plan.occlusion`: the frame's depth after the base pass; receivers it hides are left
+    /// out.
+    pub occlusion: Option<(&'a DepthPyramid, &'a CameraSetup)>,
 }
 
 #[derive(Default)]
@@ -103,6 +146,33 @@ fn part_key(
     h.finish()
 }
 
+/// Consecutive parts merged into draw calls where their counting, transform and rectangle agree
+/// and their vertices are adjacent.
+fn draws_of(parts: &[PartRange]) -> Vec<VolumeDraw> {
+    let mut draws: Vec<VolumeDraw> = Vec::new();
+    for p in parts {
+        let count = p.sides + p.caps;
+        match draws.last_mut() {
+            Some(d)
+                if d.counting == p.part.counting
+                    && d.model == p.model
+                    && d.scissor == p.scissor
+                    && d.first + d.count == p.first =>
+            {
+                d.count += count;
+            }
+            _ => draws.push(VolumeDraw {
+                counting: p.part.counting,
+                model: p.model,
+                first: p.first,
+                count,
+                scissor: p.scissor,
+            }),
+        }
+    }
+    draws
+}
+
 impl VolumeCache {
     /// The light's volumes: parts whose key changed are rebuilt (all of them when `caching` is
     /// off), the buffer re-uploaded when its contents changed.
@@ -112,7 +182,20 @@ impl VolumeCache {
         scene: &Scene,
         lp: &LightPlan,
         o: &ShadowVolumeOptions,
+        pieces: PieceChoices,
     ) -> Result<&LightVolumes, String> {
+        let piece_scissor = pieces.scissor;
+        // Without receiver boxes (no caster culling) every part is built whole.
+        let culling = !lp.volume_receivers.is_empty();
+        let receivers: Vec<crate::scene::Aabb> = match pieces.occlusion {
+            Some((depth, camera)) => lp
+                .volume_receivers
+                .iter()
+                .filter(|b| !depth.hides(camera, b))
+                .copied()
+                .collect(),
+            None => lp.volume_receivers.clone(),
+        };
         let start = Instant::now();
         let groups = scene.caster_groups();
         let s = settings(o);
@@ -126,6 +209,7 @@ impl VolumeCache {
                     vao,
                     vbo,
                     parts: Vec::new(),
+                    draws: Vec::new(),
                     stats: VolumeStats::default(),
                     meshes: HashMap::new(),
                     uploaded: 0,
@@ -134,6 +218,7 @@ impl VolumeCache {
         };
         let mut stats = VolumeStats {
             light: lp.light,
+            receivers_hidden: lp.volume_receivers.len() - receivers.len(),
             ..VolumeStats::default()
         };
         let radius = scene.lights[lp.light].radius;
@@ -141,6 +226,7 @@ impl VolumeCache {
         let mut local_boxes: HashMap<usize, Vec<crate::scene::Aabb>> = HashMap::new();
         let mut keys = Vec::with_capacity(lp.volumes.len());
         let mut models = Vec::with_capacity(lp.volumes.len());
+        let mut rects = Vec::with_capacity(lp.volumes.len());
         for p in &lp.volumes {
             let group = &groups.groups[p.group];
             let model = volume::group_transform(scene, group.owner);
@@ -151,12 +237,9 @@ impl VolumeCache {
             } else {
                 &group.components[p.component]
             };
-            let boxes = local_boxes.entry(p.group).or_insert_with(|| {
-                lp.volume_receivers
-                    .iter()
-                    .map(|b| b.transformed(&to_local))
-                    .collect()
-            });
+            let boxes = local_boxes
+                .entry(p.group)
+                .or_insert_with(|| receivers.iter().map(|b| b.transformed(&to_local)).collect());
             // The range in the group's space (a scaled model stretches it).
             let stretch = [to_local.x_axis, to_local.y_axis, to_local.z_axis]
                 .iter()
@@ -173,7 +256,8 @@ impl VolumeCache {
                 .collect();
             let receivers_key = {
                 let mut h = std::collections::hash_map::DefaultHasher::new();
-                lp.volume_receivers.is_empty().hash(&mut h);
+                culling.hash(&mut h);
+                pieces.truncate.hash(&mut h);
                 local_radius.to_bits().hash(&mut h);
                 for b in &near {
                     (
@@ -184,6 +268,27 @@ impl VolumeCache {
                 }
                 h.finish()
             };
+            // A piece's volume is closed, so its counts cancel wherever the visible surface is
+            // outside it: only receiver points in its shadow (within the range, inside
+            // `piece_shadow`) can see a change. Their boxes, cut to that shadow, bound it.
+            rects.push(match piece_scissor {
+                Some(camera) if culling => {
+                    let light_rect = lp.scissor.unwrap_or_else(|| Scissor::full(camera));
+                    let mut rect: Option<Scissor> = None;
+                    for b in &near {
+                        let cut = crate::scene::Aabb {
+                            min: b.min.max(piece_shadow.min),
+                            max: b.max.min(piece_shadow.max),
+                        };
+                        let corners = cut.corners().map(|c| model.transform_point3(c));
+                        if let Some(r) = points_scissor(camera, &corners).filter(|r| r.area() > 0) {
+                            rect = Some(rect.map_or(r, |u| u.union(&r)));
+                        }
+                    }
+                    Some(rect.map_or(Scissor::EMPTY, |r| r.intersect(&light_rect)))
+                }
+                _ => None,
+            });
             let key = part_key(light_world, o, p, &model, receivers_key);
             let cached = lv
                 .meshes
@@ -193,9 +298,10 @@ impl VolumeCache {
                 stats.parts_reused += 1;
             } else {
                 let with_caps = p.counting == Counting::ZFail;
-                let cull = (!lp.volume_receivers.is_empty()).then_some(volume::ReceiverCull {
+                let cull = culling.then_some(volume::ReceiverCull {
                     boxes: &near,
                     radius: local_radius,
+                    truncate: pieces.truncate,
                 });
                 let mesh = volume::build_volume_of(
                     group,
@@ -232,10 +338,29 @@ impl VolumeCache {
         };
         let mut parts = Vec::with_capacity(lp.volumes.len());
         let mut vertices: Vec<[f32; 4]> = Vec::new();
-        for (p, model) in lp.volumes.iter().zip(models) {
+        let mut scissored = 0.0;
+        // Depth-fail parts first, each group's together, so that runs of parts can share a
+        // draw call (a depth-pass part has no caps: its sides are all it draws).
+        let mut order: Vec<_> = lp.volumes.iter().zip(models).zip(rects).collect();
+        order.sort_by_key(|((p, _), _)| (p.counting != Counting::ZFail, p.group));
+        for ((p, model), scissor) in order {
             let mesh = &lv.meshes[&(p.group, p.component, p.chunked)].mesh;
             if mesh.vertices.is_empty() {
                 continue;
+            }
+            if mesh.truncated {
+                stats.parts_truncated += 1;
+            }
+            if let Some(s) = scissor {
+                if s.area() == 0 {
+                    stats.parts_offscreen += 1;
+                    continue;
+                }
+                if let Some(camera) = piece_scissor {
+                    scissored += s.area() as f64 / Scissor::full(camera).area().max(1) as f64;
+                }
+            } else {
+                scissored += 1.0;
             }
             stats.quads += mesh.quads;
             stats.cap_triangles += mesh.cap_vertices / 3;
@@ -245,10 +370,16 @@ impl VolumeCache {
                 first: vertices.len() as i32,
                 sides: mesh.side_vertices as i32,
                 caps: mesh.cap_vertices as i32,
+                scissor,
             });
             vertices.extend_from_slice(&mesh.vertices);
         }
         stats.rebuilt = stats.parts_built > 0;
+        stats.part_scissor_fraction = if parts.is_empty() {
+            0.0
+        } else {
+            scissored / parts.len() as f64
+        };
         if contents != lv.uploaded || stats.rebuilt {
             // SAFETY: uploads plain f32 vertices; attribute 0 is a vec4 position.
             unsafe {
@@ -267,6 +398,7 @@ impl VolumeCache {
             lv.uploaded = contents;
         }
         stats.build_ms = start.elapsed().as_secs_f64() * 1e3;
+        lv.draws = draws_of(&parts);
         lv.parts = parts;
         lv.stats = stats;
         Ok(&self.lights[&lp.light])

@@ -5,6 +5,7 @@
 pub mod auto;
 pub mod cull;
 pub mod frustum;
+pub mod occlusion;
 pub mod scissor;
 
 use crate::options::{CountingMode, Options, Technique, VolumeProjection};

@@ -70,6 +70,27 @@ pub fn points_scissor(camera: &CameraSetup, points: &[Vec3]) -> Option<Scissor> 
 }
 
 impl Scissor {
+    pub const EMPTY: Scissor = Scissor {
+        x: 0,
+        y: 0,
+        width: 0,
+        height: 0,
+    };
+
+    /// The smallest rectangle holding both.
+    pub fn union(&self, o: &Scissor) -> Scissor {
+        let x0 = self.x.min(o.x);
+        let y0 = self.y.min(o.y);
+        let x1 = (self.x + self.width).max(o.x + o.width);
+        let y1 = (self.y + self.height).max(o.y + o.height);
+        Scissor {
+            x: x0,
+            y: y0,
+            width: x1 - x0,
+            height: y1 - y0,
+        }
+    }
+
     /// The overlap of two rectangles (possibly empty).
     pub fn intersect(&self, o: &Scissor) -> Scissor {
         let x0 = self.x.max(o.x);

@@ -16,6 +16,7 @@ pub use crate::options::{EdgeRule, Extrusion};
 use crate::scene::{Aabb, Scene, SurfaceOwner};
 use glam::{DVec3, Mat4, Vec3};
 use serde::Serialize;
+use std::collections::HashMap;
 
 /// Whether a component's volume is counted in front of (depth-pass) or behind (depth-fail) the
 /// visible surface.
@@ -81,20 +82,44 @@ pub fn shadow_bounds(caster: &Aabb, light: Vec3, radius: f32) -> Aabb {
 pub struct ReceiverCull<'a> {
     pub boxes: &'a [Aabb],
     pub radius: f32,
+    /// End the volume just past the receivers instead of at infinity (see [`truncation`]).
+    pub truncate: bool,
 }
 
 /// How far behind a triangle's plane a receiver must reach to be in its shadow: the exact
 /// reference lifts its rays 0.01 units off surfaces, so it resolves nothing closer either.
 const BEHIND: f64 = 0.01;
 
+/// Beyond the farthest receiver point a truncated volume's far cap keeps this margin (world
+/// units, plus 1% of the depth), so that it never meets a receiver in the depth test.
+const FAR_CAP_MARGIN: f64 = 1.0;
+
+/// Scale factors above this (a light almost touching a facing triangle) keep the volume
+/// infinite: a far cap so far out would buy little and cost precision.
+const MAX_TRUNCATION: f64 = 1.0e4;
+
 /// Whether facing triangle `t`'s shadow can reach one of `boxes` (those already known to meet
-/// its piece's shadow): its shadow is the part of the pyramid from the light through the
-/// triangle that lies behind the triangle's plane, and a box must reach inside all four of those
-/// planes (a conservative test: a box near an edge of the pyramid may pass).
-fn shadow_reaches(c: &Connectivity, t: usize, light: Vec3, radius: f32, boxes: &[&Aabb]) -> bool {
+/// its piece's shadow), and if so how far its volume must reach to hold every point of them
+/// that it shadows. Its shadow is the part of the pyramid from the light through the triangle
+/// that lies behind the triangle's plane, and a box must reach inside all four of those planes
+/// (a conservative test: a box near an edge of the pyramid may pass).
+///
+/// The reach is a scale about the light (the triangle scaled by it is the volume's far cap; the
+/// infinite volume has ∞): a point P behind the triangle on the ray from the light through x
+/// sits at λ = 1 + h(P) / d, where d is the light's height above the triangle's plane and h(P)
+/// the point's depth behind it, largest at a box corner; within the range λ ≤ radius / |x − L|
+/// as well. Up to that scale the truncated volume is the infinite one.
+fn shadow_reach(
+    c: &Connectivity,
+    t: usize,
+    light: Vec3,
+    radius: f32,
+    boxes: &[&Aabb],
+) -> Option<f64> {
     let l = light.as_dvec3();
     let corners = c.triangles[t].map(|v| c.positions[v as usize]);
-    let in_range = shadow_bounds(&Aabb::from_points(corners), light, radius);
+    let bounds = Aabb::from_points(corners);
+    let in_range = shadow_bounds(&bounds, light, radius);
     let tri = corners.map(|p| p.as_dvec3());
     let plane = &c.planes[t];
     // Planes (n, d), inside where n·x + d >= 0: behind the triangle, and the pyramid's sides.
@@ -111,30 +136,46 @@ fn shadow_reaches(c: &Connectivity, t: usize, light: Vec3, radius: f32, boxes: &
         }
         planes.push((n, -n.dot(a)));
     }
-    boxes.iter().any(|b| {
-        b.intersects(&in_range)
-            && planes.iter().all(|(n, d)| {
-                // The box corner furthest inside the plane.
-                let corner = glam::DVec3::new(
-                    if n.x >= 0.0 {
-                        b.max.x as f64
-                    } else {
-                        b.min.x as f64
-                    },
-                    if n.y >= 0.0 {
-                        b.max.y as f64
-                    } else {
-                        b.min.y as f64
-                    },
-                    if n.z >= 0.0 {
-                        b.max.z as f64
-                    } else {
-                        b.min.z as f64
-                    },
-                );
-                n.dot(corner) + d >= 0.0
-            })
-    })
+    let nearest = light.clamp(bounds.min, bounds.max).distance(light) as f64;
+    let by_range = if nearest > 1e-3 {
+        radius as f64 * 1.01 / nearest + 0.01
+    } else {
+        f64::INFINITY
+    };
+    let height = plane.normal.dot(l) + plane.d;
+    let behind = -plane.normal;
+    let mut reach: Option<f64> = None;
+    for b in boxes {
+        if !b.intersects(&in_range)
+            || !planes
+                .iter()
+                .all(|(n, d)| n.dot(furthest_corner(b, *n)) + d >= 0.0)
+        {
+            continue;
+        }
+        let cut = Aabb {
+            min: b.min.max(in_range.min),
+            max: b.max.min(in_range.max),
+        };
+        let deepest = (behind.dot(furthest_corner(&cut, behind)) - plane.d).max(0.0);
+        let by_box = if height > 1e-6 {
+            1.0 + (deepest * 1.01 + FAR_CAP_MARGIN) / height
+        } else {
+            f64::INFINITY
+        };
+        let needed = by_box.min(by_range);
+        reach = Some(reach.map_or(needed, |r| r.max(needed)));
+    }
+    reach
+}
+
+/// The corner of `b` furthest along `n`.
+fn furthest_corner(b: &Aabb, n: DVec3) -> DVec3 {
+    DVec3::new(
+        if n.x >= 0.0 { b.max.x } else { b.min.x } as f64,
+        if n.y >= 0.0 { b.max.y } else { b.min.y } as f64,
+        if n.z >= 0.0 { b.max.z } else { b.min.z } as f64,
+    )
 }
 
 /// Largest piece of [`CasterGroup::chunks`].
@@ -354,19 +395,29 @@ pub struct VolumeMesh {
     pub quads: usize,
     /// Facing triangles (each gives a front and a back cap triangle under depth-fail).
     pub facing: usize,
+    /// Whether each facing triangle's volume ends just past the receivers it shadows (then
+    /// the caps hold the far cap under depth-pass too).
+    pub truncated: bool,
 }
 
 impl VolumeMesh {
-    /// Vertices drawn: sides only for depth-pass, sides and caps for depth-fail.
-    pub fn drawn(&self, counting: Counting) -> usize {
-        match counting {
-            Counting::ZPass => self.side_vertices,
-            Counting::ZFail => self.side_vertices + self.cap_vertices,
-        }
+    /// Vertices drawn: sides and the caps built (depth-pass builds none, or a truncated
+    /// volume's far cap).
+    pub fn drawn(&self) -> usize {
+        self.side_vertices + self.cap_vertices
     }
 }
 
-fn extrude(p: DVec3, light: DVec3, s: &VolumeSettings) -> [f64; 4] {
+/// `p` pushed away from the light to `scale` times its offset from it (1: `p` itself); an
+/// infinite scale extrudes as the settings say.
+fn extrude(p: DVec3, light: DVec3, s: &VolumeSettings, scale: f64) -> [f64; 4] {
+    if scale == 1.0 {
+        return [p.x, p.y, p.z, 1.0];
+    }
+    if scale.is_finite() {
+        let q = light + (p - light) * scale;
+        return [q.x, q.y, q.z, 1.0];
+    }
     match s.extrusion {
         // P' = (P.xyz L.w - L.xyz P.w, 0) with P.w = L.w = 1.
         Extrusion::Infinite => {
@@ -478,6 +529,9 @@ pub fn build_volume_of(
     let pos = |i: u32| c.positions[i as usize].as_dvec3();
     let mut facing = facing_flags_of(group, comp, light, s.facing_epsilon);
     let mut culled = 0;
+    // Per facing triangle, how far its volume reaches (a scale about the light; ∞: to
+    // infinity, or the settings' finite distance).
+    let mut reach: HashMap<u32, f64> = HashMap::new();
     if let Some(rc) = cull {
         let l = light.as_vec3();
         let piece_shadow = shadow_bounds(&comp.bounds, l, rc.radius);
@@ -487,9 +541,18 @@ pub fn build_volume_of(
             .filter(|b| b.intersects(&piece_shadow))
             .collect();
         for &t in &comp.triangles {
-            if facing[t as usize] && !shadow_reaches(c, t as usize, l, rc.radius, &near) {
-                facing[t as usize] = false;
-                culled += 1;
+            if !facing[t as usize] {
+                continue;
+            }
+            match shadow_reach(c, t as usize, l, rc.radius, &near) {
+                None => {
+                    facing[t as usize] = false;
+                    culled += 1;
+                }
+                Some(scale) if rc.truncate => {
+                    reach.insert(t, scale);
+                }
+                Some(_) => {}
             }
         }
     }
@@ -499,17 +562,29 @@ pub fn build_volume_of(
         .copied()
         .filter(|&t| facing[t as usize])
         .collect();
+    // One far cap scale for the whole piece, the largest any facing triangle needs: a light
+    // touching one keeps the piece infinite. (A scale per triangle ends each prism sooner but
+    // adds a step side on every inner edge: on oa_dm1 it doubled the triangles and cut only a
+    // sixth of the fragments, a net loss on llvmpipe.)
+    let scale = facing_list
+        .iter()
+        .map(|t| reach.get(t).copied().unwrap_or(f64::INFINITY))
+        .fold(1.0f64, f64::max);
+    let truncated = !facing_list.is_empty() && scale <= MAX_TRUNCATION;
+    let scale_of = |_t: u32| -> f64 { if truncated { scale } else { f64::INFINITY } };
     let mut mesh = VolumeMesh {
         facing: facing_list.len(),
         culled,
+        truncated,
         ..VolumeMesh::default()
     };
-    let quad = |a: u32, b: u32, out: &mut Vec<[f32; 4]>| {
+    // The side of edge (a, b) from scale `from` (1: the edge itself) to scale `to`.
+    let quad = |a: u32, b: u32, from: f64, to: f64, out: &mut Vec<[f32; 4]>| {
         // (b, a, a', b') faces out of the volume when (a, b) runs along the facing triangle's
         // counter-clockwise winding.
         let (pa, pb) = (pos(a), pos(b));
-        let (ea, eb) = (extrude(pa, light, s), extrude(pb, light, s));
-        let (va, vb) = ([pa.x, pa.y, pa.z, 1.0], [pb.x, pb.y, pb.z, 1.0]);
+        let (ea, eb) = (extrude(pa, light, s, to), extrude(pb, light, s, to));
+        let (va, vb) = (extrude(pa, light, s, from), extrude(pb, light, s, from));
         // The diagonal runs from the lower vertex index's point to the other's extrusion, so
         // that the two opposite quads of an edge between pieces (chunks) are the same triangles
         // and cancel pixel for pixel.
@@ -536,46 +611,74 @@ pub fn build_volume_of(
     for &ei in &comp.edges {
         let e = &c.edges[ei as usize];
         let tris = c.triangles_of(e);
+        let facing_here: Vec<u32> = tris
+            .iter()
+            .copied()
+            .filter(|&t| facing[t as usize])
+            .collect();
+        // Two facing triangles on an edge that the rule treats as inner: their sides cancel
+        // up to the nearer reach; the rest of the farther one's side stays (nothing when both
+        // reach equally far, as at infinity).
+        let inner = |mesh: &mut VolumeMesh, t0: u32, t1: u32| {
+            let (k0, k1) = (scale_of(t0), scale_of(t1));
+            let (far, from, to) = if k0 >= k1 { (t0, k1, k0) } else { (t1, k0, k1) };
+            if from < to {
+                let (a, b) = oriented(far, e.v);
+                quad(a, b, from, to, &mut mesh.vertices);
+                mesh.quads += 1;
+            }
+        };
         match s.rule {
             EdgeRule::Paper => {
-                let facing_here = tris.iter().filter(|&&t| facing[t as usize]).count();
-                if tris.len() == 2 && facing_here == 2 {
+                if tris.len() == 2 && facing_here.len() == 2 {
+                    inner(&mut mesh, facing_here[0], facing_here[1]);
                     continue;
                 }
-                for &t in tris.iter().filter(|&&t| facing[t as usize]) {
+                for &t in &facing_here {
                     let (a, b) = oriented(t, e.v);
-                    quad(a, b, &mut mesh.vertices);
+                    quad(a, b, 1.0, scale_of(t), &mut mesh.vertices);
                     mesh.quads += 1;
                 }
             }
             EdgeRule::All => {
-                for &t in tris.iter().filter(|&&t| facing[t as usize]) {
+                for &t in &facing_here {
                     let (a, b) = oriented(t, e.v);
-                    quad(a, b, &mut mesh.vertices);
+                    quad(a, b, 1.0, scale_of(t), &mut mesh.vertices);
                     mesh.quads += 1;
                 }
             }
             EdgeRule::Signed => {
-                // +1 for each facing triangle running v[0] -> v[1], -1 for v[1] -> v[0].
-                let net: i32 = tris
+                // +1 for each facing triangle running v[0] -> v[1], -1 for v[1] -> v[0], each
+                // from the edge to its own reach: between consecutive reaches the net of the
+                // triangles reaching further.
+                let mut spans: Vec<(f64, i32)> = facing_here
                     .iter()
-                    .filter(|&&t| facing[t as usize])
                     .map(|&t| {
-                        if oriented(t, e.v) == (e.v[0], e.v[1]) {
+                        let sign = if oriented(t, e.v) == (e.v[0], e.v[1]) {
                             1
                         } else {
                             -1
-                        }
+                        };
+                        (scale_of(t), sign)
                     })
-                    .sum();
-                let (a, b) = if net > 0 {
-                    (e.v[0], e.v[1])
-                } else {
-                    (e.v[1], e.v[0])
-                };
-                for _ in 0..net.unsigned_abs() {
-                    quad(a, b, &mut mesh.vertices);
-                    mesh.quads += 1;
+                    .collect();
+                spans.sort_by(|x, y| x.0.total_cmp(&y.0));
+                let mut from = 1.0;
+                for i in 0..spans.len() {
+                    let to = spans[i].0;
+                    let net: i32 = spans[i..].iter().map(|x| x.1).sum();
+                    if to > from && net != 0 {
+                        let (a, b) = if net > 0 {
+                            (e.v[0], e.v[1])
+                        } else {
+                            (e.v[1], e.v[0])
+                        };
+                        for _ in 0..net.unsigned_abs() {
+                            quad(a, b, from, to, &mut mesh.vertices);
+                            mesh.quads += 1;
+                        }
+                    }
+                    from = from.max(to);
                 }
             }
             EdgeRule::Manifold => {
@@ -583,10 +686,12 @@ pub fn build_volume_of(
                     continue;
                 }
                 let (f0, f1) = (facing[tris[0] as usize], facing[tris[1] as usize]);
-                if f0 != f1 {
+                if f0 && f1 {
+                    inner(&mut mesh, tris[0], tris[1]);
+                } else if f0 != f1 {
                     let t = if f0 { tris[0] } else { tris[1] };
                     let (a, b) = oriented(t, e.v);
-                    quad(a, b, &mut mesh.vertices);
+                    quad(a, b, 1.0, scale_of(t), &mut mesh.vertices);
                     mesh.quads += 1;
                 }
             }
@@ -600,15 +705,19 @@ pub fn build_volume_of(
                 mesh.vertices.push(to_f32([p.x, p.y, p.z, 1.0]));
             }
         }
+    }
+    // A truncated volume's far cap closes it under depth-pass too.
+    if with_caps || truncated {
         for &t in &facing_list {
             let [a, b, c3] = c.triangles[t as usize].map(pos);
             // Flipped: the back cap faces away from the light, out of the volume.
             for p in [c3, b, a] {
-                mesh.vertices.push(to_f32(extrude(p, light, s)));
+                mesh.vertices
+                    .push(to_f32(extrude(p, light, s, scale_of(t))));
             }
         }
-        mesh.cap_vertices = mesh.vertices.len() - mesh.side_vertices;
     }
+    mesh.cap_vertices = mesh.vertices.len() - mesh.side_vertices;
     mesh
 }
 
@@ -756,6 +865,80 @@ mod tests {
             light,
             1.0
         ));
+    }
+
+    /// Generalised winding number of the closed triangle soup `vertices` (w = 1) at `p`: the
+    /// signed solid angles of its triangles over 4π (Van Oosterom and Strackee).
+    fn winding(vertices: &[[f32; 4]], p: DVec3) -> f64 {
+        let mut total = 0.0;
+        for t in vertices.chunks_exact(3) {
+            let [a, b, c] =
+                [t[0], t[1], t[2]].map(|v| DVec3::new(v[0] as f64, v[1] as f64, v[2] as f64) - p);
+            let (la, lb, lc) = (a.length(), b.length(), c.length());
+            let num = a.dot(b.cross(c));
+            let den = la * lb * lc + a.dot(b) * lc + b.dot(c) * la + c.dot(a) * lb;
+            total += 2.0 * num.atan2(den);
+        }
+        total / (4.0 * std::f64::consts::PI)
+    }
+
+    #[test]
+    fn a_truncated_volume_holds_exactly_the_shadowed_receiver_points() {
+        let g = CasterGroup::build(
+            SurfaceOwner::World,
+            tris(&cuboid(Vec3::splat(-1.0), Vec3::splat(1.0), 1.0)),
+        );
+        let light = DVec3::new(0.3, 0.2, 10.0);
+        let floor = Aabb {
+            min: Vec3::new(-20.0, -20.0, -3.0),
+            max: Vec3::new(20.0, 20.0, -2.0),
+        };
+        let cull = |truncate| {
+            Some(ReceiverCull {
+                boxes: std::slice::from_ref(&floor),
+                radius: 100.0,
+                truncate,
+            })
+        };
+        let s = settings(EdgeRule::Paper);
+        for with_caps in [false, true] {
+            let v = build_volume_of(&g, &g.components[0], light, &s, with_caps, cull(true));
+            assert!(v.truncated);
+            let infinite = build_volume_of(&g, &g.components[0], light, &s, with_caps, cull(false));
+            assert!(!infinite.truncated && infinite.quads == v.quads);
+            // Finite everywhere, closed by a far cap even without the depth-fail caps, and the
+            // far cap just below the floor box.
+            assert!(v.vertices.iter().all(|p| p[3] == 1.0));
+            let far = &v.vertices[v.vertices.len() - 3 * v.facing..];
+            assert!(far.iter().all(|p| p[2] < -3.0 && p[2] > -6.0), "{far:?}");
+            if !with_caps {
+                assert_eq!(v.cap_vertices, 3 * v.facing);
+                continue;
+            }
+            // A point of the floor box is inside the volume exactly when the cube hides the
+            // light from it.
+            let (mut inside, mut outside) = (0, 0);
+            for i in 0..21 {
+                for j in 0..21 {
+                    let p = DVec3::new(-5.05 + 0.5 * i as f64, -5.05 + 0.5 * j as f64, -2.5);
+                    let shadowed = (0..=1000).any(|k| {
+                        let q = p + (light - p) * (k as f64 / 1000.0);
+                        q.abs().max_element() <= 1.0
+                    });
+                    let w = winding(&v.vertices, p);
+                    assert!(
+                        (w.abs() - if shadowed { 1.0 } else { 0.0 }).abs() < 1e-6,
+                        "{p} {w}"
+                    );
+                    if shadowed {
+                        inside += 1;
+                    } else {
+                        outside += 1;
+                    }
+                }
+            }
+            assert!(inside > 20 && outside > 20, "{inside} {outside}");
+        }
     }
 
     #[test]

@@ -103,3 +103,17 @@ pub fn draw_items_with(
         gl.bind_vertex_array(None);
     }
 }
+
+/// Scissors to `s`, or switches the scissor test off.
+pub fn set_scissor(gl: &glow::Context, s: Option<crate::plan::scissor::Scissor>) {
+    // SAFETY: fixed-function state only.
+    unsafe {
+        match s {
+            Some(s) => {
+                gl.enable(glow::SCISSOR_TEST);
+                gl.scissor(s.x, s.y, s.width, s.height);
+            }
+            None => gl.disable(glow::SCISSOR_TEST),
+        }
+    }
+}

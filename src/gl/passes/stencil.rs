@@ -10,6 +10,7 @@ use super::PassContext;
 use crate::gl::program::Program;
 use crate::gl::volumes::LightVolumes;
 use crate::options::{StencilPasses, StencilWrap, VolumeProjection};
+use crate::plan::scissor::Scissor;
 use crate::shadow::volume::Counting;
 use glow::HasContext;
 
@@ -35,20 +36,26 @@ fn draw_parts(gl: &glow::Context, program: &Program, v: &LightVolumes, counting:
     // SAFETY: the light's own vertex array; ranges lie inside its buffer.
     unsafe {
         gl.bind_vertex_array(Some(v.vao));
-        for p in v.parts.iter().filter(|p| p.part.counting == counting) {
-            program.set_mat4(gl, "u_model", &p.model);
-            let count = match counting {
-                Counting::ZPass => p.sides,
-                Counting::ZFail => p.sides + p.caps,
-            };
-            gl.draw_arrays(glow::TRIANGLES, p.first, count);
+        for d in v.draws.iter().filter(|d| d.counting == counting) {
+            if let Some(s) = d.scissor {
+                gl.enable(glow::SCISSOR_TEST);
+                gl.scissor(s.x, s.y, s.width, s.height);
+            }
+            program.set_mat4(gl, "u_model", &d.model);
+            gl.draw_arrays(glow::TRIANGLES, d.first, d.count);
         }
         gl.bind_vertex_array(None);
     }
 }
 
-/// Clears the stencil and counts the light's volumes into it.
-pub fn draw(ctx: &PassContext, program: &Program, volumes: &LightVolumes) {
+/// Clears the stencil and counts the light's volumes into it. Parts with a rectangle of their
+/// own draw inside it; the scissor is left as `light_scissor` (the caller's) afterwards.
+pub fn draw(
+    ctx: &PassContext,
+    program: &Program,
+    volumes: &LightVolumes,
+    light_scissor: Option<Scissor>,
+) {
     let gl = ctx.gl;
     let o = &ctx.options.shadow_volume;
     // SAFETY: fixed-function state on the bound framebuffer.
@@ -114,6 +121,7 @@ pub fn draw(ctx: &PassContext, program: &Program, volumes: &LightVolumes) {
             }
         }
     }
+    super::set_scissor(gl, light_scissor);
     // SAFETY: state reset for the lit pass, which sets what it needs.
     unsafe {
         gl.stencil_op(glow::KEEP, glow::KEEP, glow::KEEP);

@@ -1,0 +1,221 @@
+//! Which boxes the camera can see any part of, judged from the frame's depth buffer after the
+//! base pass: a CPU copy of the hierarchical-Z test a GPU does per tile. A receiver whose box is
+//! wholly behind what the camera sees holds no visible pixel, so no shadow volume has to reach
+//! it; casters whose shadow reaches only such receivers then drop out (see `shadow::volume`).
+
+use super::CameraSetup;
+use crate::scene::Aabb;
+
+/// How far (in window depth) a box must lie behind the depth buffer to count as hidden: a few
+/// hundred steps of a 24-bit buffer, against rounding in the rasterised depth and in the box's
+/// projection.
+const DEPTH_MARGIN: f32 = 1.0 / (1 << 16) as f32;
+
+/// Max-depth mip chain of a depth image (window depth, 0 near .. 1 far).
+#[derive(Debug)]
+pub struct DepthPyramid {
+    /// Level 0 is the image (rows bottom-up, as GL's window coordinates); level k+1 holds the
+    /// maximum of each 2×2 block of level k (edges padded by repetition).
+    levels: Vec<Level>,
+}
+
+#[derive(Debug)]
+struct Level {
+    width: usize,
+    height: usize,
+    max: Vec<f32>,
+}
+
+impl Level {
+    fn at(&self, x: usize, y: usize) -> f32 {
+        self.max[y * self.width + x]
+    }
+}
+
+impl DepthPyramid {
+    /// From `depth` (`width`×`height` values, top row first, as `read_pixels` gives them).
+    /// None when the sizes disagree.
+    pub fn from_top_down(depth: &[f32], width: usize, height: usize) -> Option<DepthPyramid> {
+        if width == 0 || height == 0 || depth.len() != width * height {
+            return None;
+        }
+        let mut base = Vec::with_capacity(depth.len());
+        for row in depth.chunks_exact(width).rev() {
+            base.extend_from_slice(row);
+        }
+        let mut levels = vec![Level {
+            width,
+            height,
+            max: base,
+        }];
+        while let Some(l) = levels.last().filter(|l| l.width > 1 || l.height > 1) {
+            let (w, h) = (l.width.div_ceil(2), l.height.div_ceil(2));
+            let mut max = Vec::with_capacity(w * h);
+            for y in 0..h {
+                for x in 0..w {
+                    let (x0, y0) = (2 * x, 2 * y);
+                    let (x1, y1) = ((x0 + 1).min(l.width - 1), (y0 + 1).min(l.height - 1));
+                    max.push(
+                        l.at(x0, y0)
+                            .max(l.at(x1, y0))
+                            .max(l.at(x0, y1))
+                            .max(l.at(x1, y1)),
+                    );
+                }
+            }
+            levels.push(Level {
+                width: w,
+                height: h,
+                max,
+            });
+        }
+        Some(DepthPyramid { levels })
+    }
+
+    /// The largest depth over the pixels `x0..=x1`, `y0..=y1` (GL window coordinates, clamped
+    /// to the image), from the level where the rectangle spans at most 4×4 texels.
+    fn max_over(&self, x0: usize, y0: usize, x1: usize, y1: usize) -> f32 {
+        let base = &self.levels[0];
+        let (x1, y1) = (x1.min(base.width - 1), y1.min(base.height - 1));
+        let span = (x1 - x0).max(y1 - y0) + 1;
+        let mut k = 0;
+        while k + 1 < self.levels.len() && (span >> k) > 4 {
+            k += 1;
+        }
+        let l = &self.levels[k];
+        let mut m = 0.0f32;
+        for y in (y0 >> k)..=(y1 >> k).min(l.height - 1) {
+            for x in (x0 >> k)..=(x1 >> k).min(l.width - 1) {
+                m = m.max(l.at(x, y));
+            }
+        }
+        m
+    }
+
+    /// Whether every pixel the box can cover shows a surface in front of the whole box, so no
+    /// point of the box is visible. Conservative: a box reaching the camera's near plane, or
+    /// whose projection is not bounded, is visible.
+    pub fn hides(&self, camera: &CameraSetup, b: &Aabb) -> bool {
+        let base = &self.levels[0];
+        if base.width != camera.width as usize || base.height != camera.height as usize {
+            return false;
+        }
+        let mut lo = glam::Vec2::splat(f32::MAX);
+        let mut hi = glam::Vec2::splat(f32::MIN);
+        let mut nearest = f32::MAX;
+        for c in b.corners() {
+            let clip = camera.view_proj * c.extend(1.0);
+            if clip.w <= 1e-4 || clip.z < -clip.w {
+                return false;
+            }
+            let ndc = clip.truncate() / clip.w;
+            lo = lo.min(ndc.truncate());
+            hi = hi.max(ndc.truncate());
+            nearest = nearest.min(ndc.z * 0.5 + 0.5);
+        }
+        if hi.x < -1.0 || hi.y < -1.0 || lo.x > 1.0 || lo.y > 1.0 {
+            // Off screen: nothing of it is seen.
+            return true;
+        }
+        let (w, h) = (camera.width as f32, camera.height as f32);
+        // Every pixel whose centre the box's projection can cover, one pixel wider each side.
+        let px = |v: f32, size: f32| ((v.clamp(-1.0, 1.0) * 0.5 + 0.5) * size).floor();
+        let x0 = (px(lo.x, w) - 1.0).max(0.0) as usize;
+        let y0 = (px(lo.y, h) - 1.0).max(0.0) as usize;
+        let x1 = (px(hi.x, w) + 1.0).max(0.0) as usize;
+        let y1 = (px(hi.y, h) + 1.0).max(0.0) as usize;
+        nearest > self.max_over(x0, y0, x1, y1) + DEPTH_MARGIN
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::scene::Camera;
+    use glam::Vec3;
+
+    fn camera() -> CameraSetup {
+        CameraSetup::new(
+            &Camera::looking_at(Vec3::ZERO, Vec3::new(100.0, 0.0, 0.0)),
+            64,
+            48,
+        )
+    }
+
+    /// Window depth of a point straight ahead at distance `d`.
+    fn depth_at(c: &CameraSetup, d: f32) -> f32 {
+        let clip = c.view_proj * Vec3::new(d, 0.0, 0.0).extend(1.0);
+        clip.z / clip.w * 0.5 + 0.5
+    }
+
+    fn small_box(center: Vec3) -> Aabb {
+        Aabb {
+            min: center - 1.0,
+            max: center + 1.0,
+        }
+    }
+
+    #[test]
+    fn a_box_behind_a_wall_is_hidden_and_one_before_it_is_not() {
+        let c = camera();
+        let wall = depth_at(&c, 50.0);
+        let p = DepthPyramid::from_top_down(&vec![wall; 64 * 48], 64, 48).unwrap();
+        assert!(p.hides(&c, &small_box(Vec3::new(80.0, 0.0, 0.0))));
+        assert!(!p.hides(&c, &small_box(Vec3::new(30.0, 0.0, 0.0))));
+        // Straddling the wall: part of it is in front.
+        assert!(!p.hides(&c, &small_box(Vec3::new(50.5, 0.0, 0.0))));
+        // Reaching behind the camera: its projection is unbounded.
+        let around = Aabb {
+            min: Vec3::splat(-5.0),
+            max: Vec3::splat(5.0),
+        };
+        assert!(!p.hides(&c, &around));
+    }
+
+    #[test]
+    fn one_far_pixel_in_the_box_rectangle_keeps_it_visible() {
+        let c = camera();
+        let (wall, far) = (depth_at(&c, 50.0), 1.0);
+        // The box's centre projects to the screen's centre, pixel corner (32, 24).
+        for (x, y, seen) in [
+            (32usize, 24usize, true),
+            (0, 0, false),
+            (63, 47, false),
+            (31, 23, true),
+        ] {
+            let mut depth = vec![wall; 64 * 48];
+            // A hole in the wall where the box projects (the centre of the screen).
+            depth[(47 - y) * 64 + x] = far;
+            let p = DepthPyramid::from_top_down(&depth, 64, 48).unwrap();
+            let ahead = small_box(Vec3::new(80.0, 0.0, 0.0));
+            assert_eq!(p.hides(&c, &ahead), !seen, "hole at {x},{y}");
+        }
+    }
+
+    #[test]
+    fn the_maximum_over_any_rectangle_matches_a_brute_force_scan() {
+        let (w, h) = (37usize, 23usize);
+        let depth: Vec<f32> = (0..w * h)
+            .map(|i| ((i * 7919) % 1009) as f32 / 1009.0)
+            .collect();
+        let p = DepthPyramid::from_top_down(&depth, w, h).unwrap();
+        for (x0, y0, x1, y1) in [
+            (0, 0, 36, 22),
+            (3, 4, 9, 7),
+            (10, 10, 10, 10),
+            (20, 0, 36, 5),
+        ] {
+            let mut brute = 0.0f32;
+            for y in y0..=y1 {
+                for x in x0..=x1 {
+                    brute = brute.max(depth[(h - 1 - y) * w + x]);
+                }
+            }
+            // A coarser level may take in texels just outside: never less than the true max.
+            assert!(p.max_over(x0, y0, x1, y1) >= brute);
+            if (x0, y0, x1, y1) == (10, 10, 10, 10) {
+                assert_eq!(p.max_over(x0, y0, x1, y1), brute);
+            }
+        }
+    }
+}
