@@ -589,7 +589,8 @@ define_options! {
         piece_scissor: bool = true;
         /// End each shadow-volume piece just past the receivers its shadow can reach (a far
         /// cap, drawn under depth-pass too) instead of at infinity (needs `cull_casters`):
-        /// the volume's fragments behind those receivers are never rasterised.
+        /// the volume's fragments behind those receivers are never rasterised. Only under
+        /// `shadow_volume.extrusion = infinite`: a finite extrusion is left as set.
         truncate_volumes: bool = true;
         /// Read the depth buffer back after the base pass and leave out of the shadow-volume
         /// work every receiver whose box it hides wholly (a max-depth pyramid, as a GPU's

@@ -301,7 +301,8 @@ impl VolumeCache {
                 let cull = culling.then_some(volume::ReceiverCull {
                     boxes: &near,
                     radius: local_radius,
-                    truncate: pieces.truncate,
+                    // An explicit finite extrusion (the paper's option) is the user's to see.
+                    truncate: pieces.truncate && o.extrusion == volume::Extrusion::Infinite,
                 });
                 let mesh = volume::build_volume_of(
                     group,
