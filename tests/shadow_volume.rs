@@ -345,16 +345,41 @@ fn volumes_are_rebuilt_only_when_the_light_moves() {
     assert!(moved[0].rebuilt && !moved[1].rebuilt);
     let uncached = options_with(&[SV, "shadow_volume.caching=false"]);
     assert!(m.measure(&uncached).frame.volumes.iter().all(|v| v.rebuilt));
-    // Depth-pass parts draw no caps.
+    // Depth-pass parts draw no caps; a volume the planner ends past its receivers draws its far
+    // cap (one triangle per facing triangle, the depth-fail parts' two).
     let zpass = m
-        .measure(&options_with(&[SV, "shadow_volume.counting=zpass"]))
+        .measure(&options_with(&[
+            SV,
+            "shadow_volume.counting=zpass",
+            "plan.truncate_volumes=false",
+        ]))
         .frame
         .volumes;
     assert!(
         zpass
             .iter()
-            .all(|v| v.cap_triangles == 0 && v.zfail_parts == 0)
+            .all(|v| v.cap_triangles == 0 && v.zfail_parts == 0 && v.parts_truncated == 0)
     );
+    let sides: Vec<usize> = zpass.iter().map(|v| v.quads).collect();
+    let truncated = m
+        .measure(&options_with(&[SV, "shadow_volume.counting=zpass"]))
+        .frame
+        .volumes;
+    let zfail = m
+        .measure(&options_with(&[
+            SV,
+            "shadow_volume.counting=zpass",
+            "plan.truncate_volumes=false",
+            "plan.counting=false",
+            "shadow_volume.counting=zfail",
+        ]))
+        .frame
+        .volumes;
+    for ((t, f), quads) in truncated.iter().zip(&zfail).zip(sides) {
+        assert!(t.zfail_parts == 0 && t.parts_truncated > 0, "{t:?}");
+        assert_eq!(t.quads, quads);
+        assert_eq!(2 * t.cap_triangles, f.cap_triangles, "{t:?} {f:?}");
+    }
 }
 
 #[test]
