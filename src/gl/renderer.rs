@@ -659,8 +659,9 @@ impl Renderer {
             None
         };
         let pieces = PieceChoices {
-            occlusion: depth.as_ref().map(|d| (d, &plan.camera)),
-            scissor: (options.plan.enabled && options.plan.piece_scissor).then_some(&plan.camera),
+            camera: &plan.camera,
+            occlusion: depth.as_ref(),
+            scissor: options.plan.enabled && options.plan.piece_scissor,
             truncate: options.plan.enabled && options.plan.truncate_volumes,
         };
         for lp in plan

@@ -94,15 +94,16 @@ struct CachedPart {
 
 /// The planner's per-piece decisions that need the receivers a piece's shadow reaches (known
 /// only with `plan.cull_casters`).
-#[derive(Debug, Clone, Copy, Default)]
+#[derive(Debug, Clone, Copy)]
 pub struct PieceChoices<'a> {
+    pub camera: &'a CameraSetup,
     /// `plan.piece_scissor`: each part gets the screen rectangle of those receivers.
-    pub scissor: Option<&'a CameraSetup>,
+    pub scissor: bool,
     /// `plan.truncate_volumes`: each part ends just past them.
     pub truncate: bool,
     /// `plan.occlusion`: the frame's depth after the base pass; receivers it hides are left
     /// out.
-    pub occlusion: Option<(&'a DepthPyramid, &'a CameraSetup)>,
+    pub occlusion: Option<&'a DepthPyramid>,
 }
 
 #[derive(Default)]
@@ -184,17 +185,17 @@ impl VolumeCache {
         o: &ShadowVolumeOptions,
         pieces: PieceChoices,
     ) -> Result<&LightVolumes, String> {
-        let piece_scissor = pieces.scissor;
+        let camera = pieces.camera;
         // Without receiver boxes (no caster culling) every part is built whole.
         let culling = !lp.volume_receivers.is_empty();
-        let receivers: Vec<crate::scene::Aabb> = match pieces.occlusion {
-            Some((depth, camera)) => lp
+        let receivers: std::borrow::Cow<[crate::scene::Aabb]> = match pieces.occlusion {
+            Some(depth) => lp
                 .volume_receivers
                 .iter()
                 .filter(|b| !depth.hides(camera, b))
                 .copied()
                 .collect(),
-            None => lp.volume_receivers.clone(),
+            None => lp.volume_receivers.as_slice().into(),
         };
         let start = Instant::now();
         let groups = scene.caster_groups();
@@ -271,23 +272,19 @@ impl VolumeCache {
             // A piece's volume is closed, so its counts cancel wherever the visible surface is
             // outside it: only receiver points in its shadow (within the range, inside
             // `piece_shadow`) can see a change. Their boxes, cut to that shadow, bound it.
-            rects.push(match piece_scissor {
-                Some(camera) if culling => {
-                    let light_rect = lp.scissor.unwrap_or_else(|| Scissor::full(camera));
-                    let mut rect: Option<Scissor> = None;
-                    for b in &near {
-                        let cut = crate::scene::Aabb {
-                            min: b.min.max(piece_shadow.min),
-                            max: b.max.min(piece_shadow.max),
-                        };
-                        let corners = cut.corners().map(|c| model.transform_point3(c));
-                        if let Some(r) = points_scissor(camera, &corners).filter(|r| r.area() > 0) {
-                            rect = Some(rect.map_or(r, |u| u.union(&r)));
-                        }
+            rects.push(if pieces.scissor && culling {
+                let light_rect = lp.scissor.unwrap_or_else(|| Scissor::full(camera));
+                let mut rect: Option<Scissor> = None;
+                for b in &near {
+                    let cut = b.intersection(&piece_shadow);
+                    let corners = cut.corners().map(|c| model.transform_point3(c));
+                    if let Some(r) = points_scissor(camera, &corners).filter(|r| r.area() > 0) {
+                        rect = Some(rect.map_or(r, |u| u.union(&r)));
                     }
-                    Some(rect.map_or(Scissor::EMPTY, |r| r.intersect(&light_rect)))
                 }
-                _ => None,
+                Some(rect.map_or(Scissor::EMPTY, |r| r.intersect(&light_rect)))
+            } else {
+                None
             });
             let key = part_key(light_world, o, p, &model, receivers_key);
             let cached = lv
@@ -357,9 +354,7 @@ impl VolumeCache {
                     stats.parts_offscreen += 1;
                     continue;
                 }
-                if let Some(camera) = piece_scissor {
-                    scissored += s.area() as f64 / Scissor::full(camera).area().max(1) as f64;
-                }
+                scissored += s.area() as f64 / Scissor::full(camera).area().max(1) as f64;
             } else {
                 scissored += 1.0;
             }

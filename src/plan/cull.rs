@@ -32,17 +32,22 @@ pub fn range_box(center: Vec3, radius: f32) -> Aabb {
 
 pub use crate::shadow::volume::shadow_bounds;
 
-/// The four planes through the light bounding the region an omni light's cube face `f` (the
-/// [`crate::shadow::views::major_face`] numbering) covers; points on the boundary belong to both
-/// faces, as the lit pass's test breaks ties.
-pub fn face_pyramid(light: Vec3, f: usize) -> Frustum {
+/// Cube face `f`'s axis and the two axes across it.
+pub fn face_axes(f: usize) -> (Vec3, Vec3, Vec3) {
     let axes = [Vec3::X, -Vec3::X, Vec3::Y, -Vec3::Y, Vec3::Z, -Vec3::Z];
-    let a = axes[f.min(5)];
-    let (u, v) = match f / 2 {
+    let (u, v) = match f.min(5) / 2 {
         0 => (Vec3::Y, Vec3::Z),
         1 => (Vec3::X, Vec3::Z),
         _ => (Vec3::X, Vec3::Y),
     };
+    (axes[f.min(5)], u, v)
+}
+
+/// The four planes through the light bounding the region an omni light's cube face `f` (the
+/// [`crate::shadow::views::major_face`] numbering) covers; points on the boundary belong to both
+/// faces, as the lit pass's test breaks ties.
+pub fn face_pyramid(light: Vec3, f: usize) -> Frustum {
+    let (a, u, v) = face_axes(f);
     let plane = |n: Vec3| {
         let n = n.normalize();
         Vec4::new(n.x, n.y, n.z, -n.dot(light))

@@ -31,13 +31,8 @@ impl Frustum {
             return false;
         }
         self.planes.iter().all(|p| {
-            // The box corner furthest along the plane normal.
-            let far = Vec3::new(
-                if p.x >= 0.0 { b.max.x } else { b.min.x },
-                if p.y >= 0.0 { b.max.y } else { b.min.y },
-                if p.z >= 0.0 { b.max.z } else { b.min.z },
-            );
-            p.truncate().dot(far) + p.w >= 0.0
+            let n = p.truncate();
+            n.dot(b.furthest_corner(n.cmpge(Vec3::ZERO))) + p.w >= 0.0
         })
     }
 

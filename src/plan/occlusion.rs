@@ -4,6 +4,7 @@
 //! it; casters whose shadow reaches only such receivers then drop out (see `shadow::volume`).
 
 use super::CameraSetup;
+use super::scissor::{Projection, project};
 use crate::scene::Aabb;
 
 /// How far (in window depth) a box must lie behind the depth buffer to count as hidden: a few
@@ -100,19 +101,9 @@ impl DepthPyramid {
         if base.width != camera.width as usize || base.height != camera.height as usize {
             return false;
         }
-        let mut lo = glam::Vec2::splat(f32::MAX);
-        let mut hi = glam::Vec2::splat(f32::MIN);
-        let mut nearest = f32::MAX;
-        for c in b.corners() {
-            let clip = camera.view_proj * c.extend(1.0);
-            if clip.w <= 1e-4 || clip.z < -clip.w {
-                return false;
-            }
-            let ndc = clip.truncate() / clip.w;
-            lo = lo.min(ndc.truncate());
-            hi = hi.max(ndc.truncate());
-            nearest = nearest.min(ndc.z * 0.5 + 0.5);
-        }
+        let Projection::Bounded { lo, hi, nearest } = project(camera, &b.corners()) else {
+            return false;
+        };
         if hi.x < -1.0 || hi.y < -1.0 || lo.x > 1.0 || lo.y > 1.0 {
             // Off screen: nothing of it is seen.
             return true;

@@ -37,22 +37,43 @@ pub fn sphere_scissor(camera: &CameraSetup, center: Vec3, radius: f32) -> Option
     points_scissor(camera, &range_box(center, radius).corners())
 }
 
+/// Where a set of points lands on the camera's screen.
+pub enum Projection {
+    /// A point lies behind or on the near plane: the hull's projection wraps around.
+    Unbounded,
+    /// Bounds of the points in normalised device coordinates, and the nearest window depth.
+    Bounded {
+        lo: glam::Vec2,
+        hi: glam::Vec2,
+        nearest: f32,
+    },
+}
+
+/// The NDC bounds and nearest depth of `points` as the camera sees them.
+pub fn project(camera: &CameraSetup, points: &[Vec3]) -> Projection {
+    let mut lo = glam::Vec2::splat(f32::MAX);
+    let mut hi = glam::Vec2::splat(f32::MIN);
+    let mut nearest = f32::MAX;
+    for c in points {
+        let clip = camera.view_proj * c.extend(1.0);
+        if clip.w <= 1e-4 || clip.z < -clip.w {
+            return Projection::Unbounded;
+        }
+        let ndc = clip.truncate() / clip.w;
+        lo = lo.min(ndc.truncate());
+        hi = hi.max(ndc.truncate());
+        nearest = nearest.min(ndc.z * 0.5 + 0.5);
+    }
+    Projection::Bounded { lo, hi, nearest }
+}
+
 /// The rectangle holding the projection of the convex hull of `points` (see
 /// [`sphere_scissor`]).
 pub fn points_scissor(camera: &CameraSetup, points: &[Vec3]) -> Option<Scissor> {
     let full = Scissor::full(camera);
-    let mut lo = glam::Vec2::splat(f32::MAX);
-    let mut hi = glam::Vec2::splat(f32::MIN);
-    for c in points {
-        let clip = camera.view_proj * c.extend(1.0);
-        // Behind or on the near plane: the projection wraps around; keep everything.
-        if clip.w <= 1e-4 || clip.z < -clip.w {
-            return Some(full);
-        }
-        let ndc = glam::Vec2::new(clip.x, clip.y) / clip.w;
-        lo = lo.min(ndc);
-        hi = hi.max(ndc);
-    }
+    let Projection::Bounded { lo, hi, .. } = project(camera, points) else {
+        return Some(full);
+    };
     if hi.x < -1.0 || hi.y < -1.0 || lo.x > 1.0 || lo.y > 1.0 {
         return None;
     }
@@ -109,13 +130,7 @@ impl Scissor {
 /// The part of the screen an omni light's cube face `f` can light within `radius`: its pyramid
 /// within the ball lies in the hull of the light and the face's square at distance `radius`.
 pub fn face_scissor(camera: &CameraSetup, light: Vec3, radius: f32, f: usize) -> Option<Scissor> {
-    let axes = [Vec3::X, -Vec3::X, Vec3::Y, -Vec3::Y, Vec3::Z, -Vec3::Z];
-    let a = axes[f.min(5)];
-    let (u, v) = match f / 2 {
-        0 => (Vec3::Y, Vec3::Z),
-        1 => (Vec3::X, Vec3::Z),
-        _ => (Vec3::X, Vec3::Y),
-    };
+    let (a, u, v) = super::cull::face_axes(f);
     let mut points = vec![light];
     for (su, sv) in [(1.0, 1.0), (1.0, -1.0), (-1.0, 1.0), (-1.0, -1.0)] {
         points.push(light + radius * (a + su * u + sv * v));

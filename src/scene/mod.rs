@@ -73,6 +73,21 @@ impl Aabb {
             && o.min.cmple(self.max).all()
     }
 
+    /// The overlap of two boxes (empty when they do not meet).
+    pub fn intersection(&self, o: &Aabb) -> Aabb {
+        Aabb {
+            min: self.min.max(o.min),
+            max: self.max.min(o.max),
+        }
+    }
+
+    /// The corner furthest along a direction whose components are non-negative where
+    /// `positive` is set (a plane's "positive vertex": the box reaches the plane's inner side
+    /// iff this corner does).
+    pub fn furthest_corner(&self, positive: glam::BVec3) -> Vec3 {
+        Vec3::select(positive, self.max, self.min)
+    }
+
     pub fn union(&self, o: &Aabb) -> Aabb {
         Aabb {
             min: self.min.min(o.min),

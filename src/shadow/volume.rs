@@ -68,11 +68,7 @@ pub fn shadow_bounds(caster: &Aabb, light: Vec3, radius: f32) -> Aabb {
     let t = (radius / d).max(1.0);
     let corners = caster.corners();
     let pushed = corners.map(|c| light + (c - light) * t);
-    let hull = Aabb::from_points(corners.into_iter().chain(pushed));
-    Aabb {
-        min: hull.min.max(range.min),
-        max: hull.max.min(range.max),
-    }
+    Aabb::from_points(corners.into_iter().chain(pushed)).intersection(&range)
 }
 
 /// The receivers a volume has to be right for, in the group's space, and the light's range:
@@ -153,10 +149,7 @@ fn shadow_reach(
         {
             continue;
         }
-        let cut = Aabb {
-            min: b.min.max(in_range.min),
-            max: b.max.min(in_range.max),
-        };
+        let cut = b.intersection(&in_range);
         let deepest = (behind.dot(furthest_corner(&cut, behind)) - plane.d).max(0.0);
         let by_box = if height > 1e-6 {
             1.0 + (deepest * 1.01 + FAR_CAP_MARGIN) / height
@@ -169,13 +162,9 @@ fn shadow_reach(
     reach
 }
 
-/// The corner of `b` furthest along `n`.
+/// [`Aabb::furthest_corner`] for an f64 direction, in f64.
 fn furthest_corner(b: &Aabb, n: DVec3) -> DVec3 {
-    DVec3::new(
-        if n.x >= 0.0 { b.max.x } else { b.min.x } as f64,
-        if n.y >= 0.0 { b.max.y } else { b.min.y } as f64,
-        if n.z >= 0.0 { b.max.z } else { b.min.z } as f64,
-    )
+    b.furthest_corner(n.cmpge(DVec3::ZERO)).as_dvec3()
 }
 
 /// Largest piece of [`CasterGroup::chunks`].
@@ -398,14 +387,6 @@ pub struct VolumeMesh {
     /// Whether each facing triangle's volume ends just past the receivers it shadows (then
     /// the caps hold the far cap under depth-pass too).
     pub truncated: bool,
-}
-
-impl VolumeMesh {
-    /// Vertices drawn: sides and the caps built (depth-pass builds none, or a truncated
-    /// volume's far cap).
-    pub fn drawn(&self) -> usize {
-        self.side_vertices + self.cap_vertices
-    }
 }
 
 /// `p` pushed away from the light to `scale` times its offset from it (1: `p` itself); an

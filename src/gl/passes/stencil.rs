@@ -37,9 +37,8 @@ fn draw_parts(gl: &glow::Context, program: &Program, v: &LightVolumes, counting:
     unsafe {
         gl.bind_vertex_array(Some(v.vao));
         for d in v.draws.iter().filter(|d| d.counting == counting) {
-            if let Some(s) = d.scissor {
-                gl.enable(glow::SCISSOR_TEST);
-                gl.scissor(s.x, s.y, s.width, s.height);
+            if d.scissor.is_some() {
+                super::set_scissor(gl, d.scissor);
             }
             program.set_mat4(gl, "u_model", &d.model);
             gl.draw_arrays(glow::TRIANGLES, d.first, d.count);
