@@ -181,41 +181,21 @@ impl GpuScene {
 
     /// The listed surfaces, merged into as few draws as the state order allows.
     pub fn draw_list_of(&self, scene: &Scene, surfaces: &[u32]) -> Vec<DrawItem> {
-        let mut sorted: Vec<u32> = surfaces.to_vec();
-        sorted.sort_unstable_by_key(|&s| self.gpu_first[s as usize]);
-        let mut items: Vec<DrawItem> = Vec::new();
-        for s in sorted {
-            let info = &scene.surfaces[s as usize];
-            let first = self.gpu_first[s as usize];
-            if let Some(last) = items.last_mut()
-                && last.material == info.material
-                && last.lightmap == info.lightmap
-                && last.baked == info.baked
-                && last.owner == info.owner
-                && last.first_index + last.index_count == first
-            {
-                last.index_count += info.index_count;
-                continue;
-            }
-            items.push(DrawItem {
-                first_index: first,
-                index_count: info.index_count,
-                material: info.material,
-                lightmap: info.lightmap,
-                baked: info.baked,
-                owner: info.owner,
-            });
-        }
-        items
+        let mut sorted: Vec<usize> = surfaces.iter().map(|&s| s as usize).collect();
+        sorted.sort_unstable_by_key(|&s| self.gpu_first[s]);
+        self.merged(scene, sorted)
     }
 
     /// The surfaces `keep` admits, merged into as few draws as the state order allows.
     pub fn draw_list(&self, scene: &Scene, mut keep: impl FnMut(usize) -> bool) -> Vec<DrawItem> {
+        self.merged(scene, self.order.iter().copied().filter(|&s| keep(s)))
+    }
+
+    /// `surfaces` in the order given, each joining the previous draw when its state matches and
+    /// its indices follow on.
+    fn merged(&self, scene: &Scene, surfaces: impl IntoIterator<Item = usize>) -> Vec<DrawItem> {
         let mut items: Vec<DrawItem> = Vec::new();
-        for &s in &self.order {
-            if !keep(s) {
-                continue;
-            }
+        for s in surfaces {
             let surf = &scene.surfaces[s];
             let first = self.gpu_first[s];
             if let Some(last) = items.last_mut()
