@@ -62,6 +62,13 @@ pub struct PartRange {
     pub scissor: Option<Scissor>,
 }
 
+impl PartRange {
+    /// False for a part whose rectangle is empty: its counts can change no receiver in view.
+    pub fn drawn(&self) -> bool {
+        self.scissor.is_none_or(|s| s.area() > 0)
+    }
+}
+
 /// One draw call of the stencil pass: consecutive parts with the same counting, transform and
 /// rectangle, whose vertices follow one another in the buffer.
 #[derive(Debug, Clone, Copy)]
@@ -83,8 +90,11 @@ pub struct LightVolumes {
     pub stats: VolumeStats,
     /// Each part's last geometry, by (group, piece, chunked), with what it was built from.
     meshes: HashMap<(usize, usize, bool), CachedPart>,
-    /// What the buffer holds: the part keys in order.
+    /// What the buffer holds: a hash of the written parts' keys in order and their length.
     uploaded: u64,
+    /// Vertices in the buffer: no draw may reach past them (llvmpipe reads out of bounds
+    /// unchecked).
+    uploaded_vertices: usize,
 }
 
 struct CachedPart {
@@ -151,7 +161,7 @@ fn part_key(
 /// and their vertices are adjacent.
 fn draws_of(parts: &[PartRange]) -> Vec<VolumeDraw> {
     let mut draws: Vec<VolumeDraw> = Vec::new();
-    for p in parts {
+    for p in parts.iter().filter(|p| p.drawn()) {
         let count = p.sides + p.caps;
         match draws.last_mut() {
             Some(d)
@@ -214,6 +224,7 @@ impl VolumeCache {
                     stats: VolumeStats::default(),
                     meshes: HashMap::new(),
                     uploaded: 0,
+                    uploaded_vertices: 0,
                 })
             }
         };
@@ -329,52 +340,60 @@ impl VolumeCache {
             .map(|p| (p.group, p.component, p.chunked))
             .collect();
         lv.meshes.retain(|k, _| wanted.contains(k));
-        let contents = {
-            let mut h = std::collections::hash_map::DefaultHasher::new();
-            keys.hash(&mut h);
-            h.finish()
-        };
         let mut parts = Vec::with_capacity(lp.volumes.len());
         let mut vertices: Vec<[f32; 4]> = Vec::new();
         let mut scissored = 0.0;
         // Depth-fail parts first, each group's together, so that runs of parts can share a
         // draw call (a depth-pass part has no caps: its sides are all it draws).
-        let mut order: Vec<_> = lp.volumes.iter().zip(models).zip(rects).collect();
+        let mut order: Vec<_> = lp
+            .volumes
+            .iter()
+            .zip(keys)
+            .zip(models.into_iter().zip(rects))
+            .collect();
         order.sort_by_key(|((p, _), _)| (p.counting != Counting::ZFail, p.group));
-        for ((p, model), scissor) in order {
+        // The buffer holds every planned part in this order, so that its layout follows the
+        // part keys alone; a part off screen is skipped when drawing, not when uploading (as
+        // the camera turns, parts leave and enter the screen with nothing rebuilt).
+        let mut layout = std::collections::hash_map::DefaultHasher::new();
+        let mut drawn = 0usize;
+        for ((p, key), (model, scissor)) in order {
             let mesh = &lv.meshes[&(p.group, p.component, p.chunked)].mesh;
             if mesh.vertices.is_empty() {
                 continue;
             }
-            if mesh.truncated {
-                stats.parts_truncated += 1;
-            }
-            if let Some(s) = scissor {
-                if s.area() == 0 {
-                    stats.parts_offscreen += 1;
-                    continue;
-                }
-                scissored += s.area() as f64 / Scissor::full(camera).area().max(1) as f64;
-            } else {
-                scissored += 1.0;
-            }
-            stats.quads += mesh.quads;
-            stats.cap_triangles += mesh.cap_vertices / 3;
-            parts.push(PartRange {
+            let range = PartRange {
                 part: *p,
                 model,
                 first: vertices.len() as i32,
                 sides: mesh.side_vertices as i32,
                 caps: mesh.cap_vertices as i32,
                 scissor,
-            });
+            };
+            key.hash(&mut layout);
             vertices.extend_from_slice(&mesh.vertices);
+            parts.push(range);
+            if !range.drawn() {
+                stats.parts_offscreen += 1;
+                continue;
+            }
+            drawn += 1;
+            if mesh.truncated {
+                stats.parts_truncated += 1;
+            }
+            scissored += scissor.map_or(1.0, |s| {
+                s.area() as f64 / Scissor::full(camera).area().max(1) as f64
+            });
+            stats.quads += mesh.quads;
+            stats.cap_triangles += mesh.cap_vertices / 3;
         }
+        vertices.len().hash(&mut layout);
+        let contents = layout.finish();
         stats.rebuilt = stats.parts_built > 0;
-        stats.part_scissor_fraction = if parts.is_empty() {
+        stats.part_scissor_fraction = if drawn == 0 {
             0.0
         } else {
-            scissored / parts.len() as f64
+            scissored / drawn as f64
         };
         if contents != lv.uploaded || stats.rebuilt {
             // SAFETY: uploads plain f32 vertices; attribute 0 is a vec4 position.
@@ -392,9 +411,22 @@ impl VolumeCache {
                 gl.bind_buffer(glow::ARRAY_BUFFER, None);
             }
             lv.uploaded = contents;
+            lv.uploaded_vertices = vertices.len();
         }
         stats.build_ms = start.elapsed().as_secs_f64() * 1e3;
-        lv.draws = draws_of(&parts);
+        let draws = draws_of(&parts);
+        if let Some(d) = draws
+            .iter()
+            .find(|d| (d.first + d.count) as usize > lv.uploaded_vertices)
+        {
+            return Err(format!(
+                "light {}: a volume draw ends at vertex {} past the {} uploaded",
+                lp.light,
+                d.first + d.count,
+                lv.uploaded_vertices
+            ));
+        }
+        lv.draws = draws;
         lv.parts = parts;
         lv.stats = stats;
         Ok(&self.lights[&lp.light])

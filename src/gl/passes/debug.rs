@@ -35,7 +35,7 @@ pub fn volumes(
         gl.enable(glow::BLEND);
         gl.blend_func(glow::SRC_ALPHA, glow::ONE_MINUS_SRC_ALPHA);
         gl.bind_vertex_array(Some(v.vao));
-        for p in &v.parts {
+        for p in v.parts.iter().filter(|p| p.drawn()) {
             program.set_mat4(gl, "u_model", &p.model);
             program.set_i32(gl, "u_first", p.first);
             if geometry {

@@ -84,7 +84,7 @@ pub fn draw(
     program.set_mat4(gl, "u_view_proj", &ctx.plan.camera.view_proj);
     let (incr, decr) = ops(o.wrap, o.stencil);
     for counting in [Counting::ZFail, Counting::ZPass] {
-        if !volumes.parts.iter().any(|p| p.part.counting == counting) {
+        if !volumes.draws.iter().any(|d| d.counting == counting) {
             continue;
         }
         // Which face increments: back faces under depth-fail, front faces under depth-pass.
