@@ -26,6 +26,11 @@ pub struct Args {
     /// recorded path file (`x y z yaw pitch` per line); the scene's camera when absent.
     #[arg(long)]
     path: Option<String>,
+    /// Time one configuration after another on one renderer, instead of round-robin (one frame
+    /// of each configuration and baseline in turn, each on its own renderer), which keeps the
+    /// ratios steady when the machine's speed drifts.
+    #[arg(long)]
+    sequential: bool,
     /// Write the rows as a JSON array.
     #[arg(long)]
     json: Option<PathBuf>,
@@ -96,6 +101,7 @@ pub fn run(common: &CommonArgs, args: &Args) -> Result<()> {
         frames,
         path: keys,
         progress: true,
+        interleave: !args.sequential,
     };
     let rows = Bench::new(&mut renderer, &scene, settings).run(&configs)?;
     println!("{}", table::markdown(&rows));

@@ -1,7 +1,8 @@
 //! Benchmarks: frame time and accuracy of each configuration of a sweep, in one run.
 //!
 //! Each configuration renders `warmup` frames, then `frames` measured frames along the camera path
-//! (cycled). Its frame time is reported absolutely and as a ratio to the same options with shadows
+//! (cycled), round-robin with the other configurations (`BenchSettings::interleave`) or one after
+//! another. Its frame time is reported absolutely and as a ratio to the same options with shadows
 //! off (technique = none), measured in the same run. Its error is measured once, on the path's
 //! first frame, against the exact reference (which is computed once per view and light and
 //! reused by every configuration).
@@ -30,6 +31,10 @@ pub struct BenchSettings {
     /// Camera poses, cycled through by the measured frames.
     pub path: Vec<PathKey>,
     pub progress: bool,
+    /// Time the configurations and their baselines round-robin, each on its own renderer (one
+    /// frame of each in turn), so that a slow drift of the machine's speed falls on all of them
+    /// alike and the ratios hold; else one configuration after another on one renderer.
+    pub interleave: bool,
 }
 
 /// One point of a sweep.
@@ -221,10 +226,58 @@ pub struct Capture {
     pub per_light: Vec<(usize, Counts)>,
 }
 
+#[derive(Clone)]
 struct Measured {
     frame_ms: Vec<f64>,
     passes: BTreeMap<String, Vec<f64>>,
     clock: &'static str,
+}
+
+/// The key under which a set of options is timed once.
+fn options_key(options: &Options) -> String {
+    serde_json::to_string(options).unwrap_or_default()
+}
+
+/// One frame's time, without per-pass glFinish (it would serialise llvmpipe's pipeline).
+fn time_frame(
+    renderer: &mut Renderer,
+    scene: &Scene,
+    camera: &crate::scene::Camera,
+    options: &Options,
+) -> Result<f64, RenderError> {
+    let frame_only = FrameRequest {
+        frame_only: true,
+        ..FrameRequest::default()
+    };
+    Ok(renderer
+        .render_at(scene, camera, options, frame_only)?
+        .frame_ms)
+}
+
+/// `frame_ms` with a few frames timed pass by pass for the breakdown.
+fn pass_breakdown(
+    renderer: &mut Renderer,
+    scene: &Scene,
+    settings: &BenchSettings,
+    options: &Options,
+    frame_ms: Vec<f64>,
+) -> Result<Measured, RenderError> {
+    let mut m = Measured {
+        frame_ms,
+        passes: BTreeMap::new(),
+        clock: "cpu",
+    };
+    for i in 0..settings.frames.clamp(1, PASS_FRAMES) {
+        let camera = settings.path[i % settings.path.len()].apply(&scene.camera);
+        let f = renderer.render_at(scene, &camera, options, FrameRequest::default())?;
+        for (name, ms) in pass_totals(&f) {
+            m.passes.entry(name).or_default().push(ms);
+        }
+        if f.passes.iter().any(|p| p.clock == "gpu") {
+            m.clock = "gpu";
+        }
+    }
+    Ok(m)
 }
 
 /// Runs a sweep on one loaded scene.
@@ -251,44 +304,65 @@ impl<'a> Bench<'a> {
     }
 
     fn measure(&mut self, options: &Options) -> Result<Measured, RenderError> {
-        let path = &self.settings.path;
-        let camera = |i: usize| path[i % path.len()].apply(&self.scene.camera);
-        for _ in 0..self.settings.warmup {
+        let (scene, settings) = (self.scene, &self.settings);
+        let camera = |i: usize| settings.path[i % settings.path.len()].apply(&scene.camera);
+        for _ in 0..settings.warmup {
             self.renderer
-                .render_at(self.scene, &camera(0), options, FrameRequest::default())?;
+                .render_at(scene, &camera(0), options, FrameRequest::default())?;
         }
-        let mut m = Measured {
-            frame_ms: Vec::new(),
-            passes: BTreeMap::new(),
-            clock: "cpu",
-        };
-        // Frame times without per-pass glFinish (it would serialise llvmpipe's pipeline)...
-        let frame_only = FrameRequest {
-            frame_only: true,
-            ..FrameRequest::default()
-        };
-        for i in 0..self.settings.frames.max(1) {
-            let f = self
-                .renderer
-                .render_at(self.scene, &camera(i), options, frame_only)?;
-            m.frame_ms.push(f.frame_ms);
+        let mut frame_ms = Vec::new();
+        for i in 0..settings.frames.max(1) {
+            frame_ms.push(time_frame(self.renderer, scene, &camera(i), options)?);
         }
-        // ...then a few frames timed pass by pass for the breakdown.
-        for i in 0..self.settings.frames.clamp(1, PASS_FRAMES) {
-            let f = self.renderer.render_at(
-                self.scene,
-                &camera(i),
-                options,
-                FrameRequest::default(),
-            )?;
-            for (name, ms) in pass_totals(&f) {
-                m.passes.entry(name).or_default().push(ms);
+        pass_breakdown(self.renderer, scene, settings, options, frame_ms)
+    }
+
+    /// Every configuration and every baseline they need, each on a renderer of its own sharing
+    /// this one's GL context, warmed up, then timed one frame each in turn (the order rotating
+    /// frame by frame), then broken down pass by pass. Keyed by `options_key`.
+    fn measure_interleaved(
+        &mut self,
+        configs: &[BenchConfig],
+        bar: &ProgressBar,
+    ) -> Result<HashMap<String, Measured>, RenderError> {
+        let (scene, settings) = (self.scene, &self.settings);
+        let camera = |i: usize| settings.path[i % settings.path.len()].apply(&scene.camera);
+        let mut timed: Vec<(String, Options)> = Vec::new();
+        for c in configs {
+            let mut wanted = vec![c.options.clone()];
+            if c.options.technique != Technique::None {
+                wanted.push(Self::shadows_off(&c.options));
             }
-            if f.passes.iter().any(|p| p.clock == "gpu") {
-                m.clock = "gpu";
+            for o in wanted {
+                let key = options_key(&o);
+                if !timed.iter().any(|(k, _)| *k == key) {
+                    timed.push((key, o));
+                }
             }
         }
-        Ok(m)
+        bar.set_message(format!("{} option sets, round-robin", timed.len()));
+        let mut renderers = Vec::with_capacity(timed.len());
+        for (_, o) in &timed {
+            let mut r = Renderer::new(self.renderer.gl_handle(), o.width, o.height)?;
+            r.load_scene(scene)?;
+            for _ in 0..settings.warmup {
+                r.render_at(scene, &camera(0), o, FrameRequest::default())?;
+            }
+            renderers.push(r);
+        }
+        let mut frame_ms = vec![Vec::new(); timed.len()];
+        for i in 0..settings.frames.max(1) {
+            for k in 0..timed.len() {
+                let j = (k + i) % timed.len();
+                let ms = time_frame(&mut renderers[j], scene, &camera(i), &timed[j].1)?;
+                frame_ms[j].push(ms);
+            }
+        }
+        let mut out = HashMap::new();
+        for (((key, o), r), ms) in timed.into_iter().zip(&mut renderers).zip(frame_ms) {
+            out.insert(key, pass_breakdown(r, scene, settings, &o, ms)?);
+        }
+        Ok(out)
     }
 
     /// `options` with shadows off. The techniques' own groups are reset too: they do nothing
@@ -304,7 +378,7 @@ impl<'a> Bench<'a> {
     }
 
     fn baseline_key(options: &Options) -> String {
-        serde_json::to_string(&Self::shadows_off(options)).unwrap_or_default()
+        options_key(&Self::shadows_off(options))
     }
 
     /// Median frame time of `options` with shadows off, measured once per distinct options.
@@ -401,10 +475,24 @@ impl<'a> Bench<'a> {
         bar: &ProgressBar,
     ) -> Result<Vec<BenchRow>, RenderError> {
         let mut rows = Vec::with_capacity(configs.len());
+        let interleaved = if self.settings.interleave {
+            self.measure_interleaved(configs, bar)?
+        } else {
+            HashMap::new()
+        };
+        let timed = |o: &Options| -> Measured { interleaved[&options_key(o)].clone() };
         for c in configs {
             bar.set_message(c.label());
             // A configuration without shadows is its own baseline.
-            let (off_ms, m) = if c.options.technique == Technique::None {
+            let (off_ms, m) = if !interleaved.is_empty() {
+                let m = timed(&c.options);
+                let off = if c.options.technique == Technique::None {
+                    m.frame_ms.clone()
+                } else {
+                    timed(&Self::shadows_off(&c.options)).frame_ms
+                };
+                (median(&mut off.clone()), m)
+            } else if c.options.technique == Technique::None {
                 let m = self.measure(&c.options)?;
                 let ms = median(&mut m.frame_ms.clone());
                 self.baselines.insert(Self::baseline_key(&c.options), ms);

@@ -46,6 +46,8 @@ impl<'a> Lab<'a> {
                 frames: settings.frames,
                 path: vec![PathKey::of(&scene.camera)],
                 progress: false,
+                // The figures' sweeps are long; one renderer keeps their memory bounded.
+                interleave: false,
             },
         );
         Lab {
