@@ -4,9 +4,11 @@ layout(location = 0) in vec4 a_position;
 
 uniform mat4 u_model;     // the caster group's space -> world
 uniform mat4 u_view_proj; // world -> camera clip
+uniform vec4 u_depth_clip; // clip-space plane the draw is clipped to (zero: none)
 
 invariant gl_Position;
 
 void main() {
     gl_Position = u_view_proj * (u_model * a_position);
+    gl_ClipDistance[0] = dot(u_depth_clip, gl_Position);
 }

@@ -596,6 +596,13 @@ define_options! {
         /// work every receiver whose box it hides wholly (a max-depth pyramid, as a GPU's
         /// hierarchical Z): casters that shadow only hidden receivers drop out.
         occlusion: bool = true;
+        /// Clip each depth-pass shadow-volume part's stencil draw (gl_ClipDistance) at the
+        /// farthest depth the depth buffer holds within its rectangle (read after the base
+        /// pass): fragments beyond it would fail the depth test, so they are not rasterised.
+        /// A depth bounds test applied to the volume. Depth-fail parts are left whole: the
+        /// mirror clip (nothing nearer than the nearest stored depth) is as exact in theory but
+        /// broke counts on llvmpipe.
+        depth_clip: bool = true;
         /// Under `shadow_volume.counting = zfail`, count depth-pass, without caps, each caster
         /// piece whose shadow cannot hold the camera (Doom 3's test) and that is not
         /// alpha-tested, depth-fail the others (as `counting = auto`; `zpass` stays `zpass`).

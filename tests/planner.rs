@@ -204,6 +204,55 @@ fn depth_pass_where_safe_changes_at_most_edge_pixels() {
     assert!(share < 0.002, "{differing} pixels differ ({share})");
 }
 
+/// Depth-pass parts clipped at the farthest depth of their rectangle (`plan.depth_clip`): the
+/// fragments clipped away would fail the depth test, so only pixels where a clipped edge
+/// rasterises differently may change; along camera paths with the caches warm.
+#[test]
+fn depth_clipped_volumes_change_at_most_edge_pixels() {
+    for name in ["oa_dm1", "wrackdm17"] {
+        let (scene, _, options) = load_scene_file(name);
+        let whole = with(
+            &options,
+            &[
+                "technique=shadow_volume",
+                "plan.counting=true",
+                "plan.depth_clip=false",
+            ],
+        );
+        let clipped = with(&whole, &["plan.depth_clip=true"]);
+        let (_ctx, mut r) = gl_on(BackendChoice::Egl, &whole);
+        let mut c = Renderer::new(_ctx.gl.clone(), whole.width, whole.height).unwrap();
+        r.load_scene(&scene).unwrap();
+        c.load_scene(&scene).unwrap();
+        let (mut differing, mut total, mut parts) = (0, 0, 0);
+        for cam in camera_path(&scene.camera, 6, 48.0) {
+            let a = c.render_at(&scene, &cam, &clipped, masks()).unwrap();
+            let b = r.render_at(&scene, &cam, &whole, masks()).unwrap();
+            parts += a
+                .volumes
+                .iter()
+                .map(|v| v.parts_depth_clipped)
+                .sum::<usize>();
+            assert_eq!(
+                b.volumes
+                    .iter()
+                    .map(|v| v.parts_depth_clipped)
+                    .sum::<usize>(),
+                0
+            );
+            differing += mask_differences(&a, &b).iter().map(|d| d.1).sum::<usize>();
+            total += receivers(&b);
+        }
+        let share = differing as f64 / total.max(1) as f64;
+        eprintln!("{name}: {parts} clipped parts, {differing} of {total} receiver pixels differ");
+        assert!(parts > 0, "{name}: nothing was clipped");
+        assert!(
+            share < 0.00001,
+            "{name}: {differing} of {total} pixels differ"
+        );
+    }
+}
+
 /// Volumes ending just past their receivers (`plan.truncate_volumes`): the same shadows but for
 /// pixels where the shorter sides, rasterised from other end points, fall differently on a
 /// pixel centre; along camera paths on the three scenes, with the caches warm.

@@ -296,6 +296,22 @@ impl Renderer {
     pub fn new(gl: Arc<glow::Context>, width: u32, height: u32) -> Result<Renderer, RenderError> {
         let target = Framebuffer::new(&gl, width, height).map_err(RenderError::Gl)?;
         let caps = caps::probe(&gl, target.depth_stencil_bits(&gl));
+        Self::with_caps(gl, target, caps)
+    }
+
+    /// A second renderer on this one's context that takes its probed capabilities rather than
+    /// probing again: the timer-query check's verdict can differ from one probe to the next
+    /// on llvmpipe, and renderers compared in one run must time their passes alike.
+    pub fn sibling(&self, width: u32, height: u32) -> Result<Renderer, RenderError> {
+        let target = Framebuffer::new(&self.gl, width, height).map_err(RenderError::Gl)?;
+        Self::with_caps(self.gl.clone(), target, self.caps.clone())
+    }
+
+    fn with_caps(
+        gl: Arc<glow::Context>,
+        target: Framebuffer,
+        caps: caps::Caps,
+    ) -> Result<Renderer, RenderError> {
         let programs = Programs::new(&gl)?;
         // SAFETY: creating an empty vertex array object.
         let empty_vao = unsafe { gl.create_vertex_array() }.map_err(RenderError::Gl)?;
@@ -645,7 +661,8 @@ impl Renderer {
             .lights
             .iter()
             .any(|l| l.technique == Technique::ShadowVolume);
-        let depth = if any_volumes && options.plan.enabled && options.plan.occlusion {
+        let reads_depth = options.plan.occlusion || options.plan.depth_clip;
+        let depth = if any_volumes && options.plan.enabled && reads_depth {
             self.timer.end(gl);
             let t = Instant::now();
             let (w, h) = (self.target.width, self.target.height);
@@ -660,7 +677,9 @@ impl Renderer {
         };
         let pieces = PieceChoices {
             camera: &plan.camera,
-            occlusion: depth.as_ref(),
+            depth: depth.as_ref(),
+            occlusion: options.plan.occlusion,
+            depth_clip: options.plan.depth_clip,
             scissor: options.plan.enabled && options.plan.piece_scissor,
             truncate: options.plan.enabled && options.plan.truncate_volumes,
         };

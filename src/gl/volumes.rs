@@ -42,6 +42,9 @@ pub struct VolumeStats {
     /// Parts ending just past their receivers rather than at infinity
     /// (`plan.truncate_volumes`).
     pub parts_truncated: usize,
+    /// Drawn depth-pass parts clipped at the farthest depth of their rectangle
+    /// (`plan.depth_clip`).
+    pub parts_depth_clipped: usize,
     /// Mean share of the screen a drawn part's stencil draw is scissored to (1 without
     /// `plan.piece_scissor`).
     pub part_scissor_fraction: f64,
@@ -60,6 +63,8 @@ pub struct PartRange {
     pub caps: i32,
     /// Where its stencil draw may change counts (None: the light's rectangle).
     pub scissor: Option<Scissor>,
+    /// A clip-space plane its stencil draw is clipped to (`gl_ClipDistance`; zero: none).
+    pub depth_clip: [f32; 4],
 }
 
 impl PartRange {
@@ -79,6 +84,22 @@ pub struct VolumeDraw {
     /// Sides, then (depth-fail) caps, of every part in it.
     pub count: i32,
     pub scissor: Option<Scissor>,
+    pub depth_clip: [f32; 4],
+}
+
+/// The clip-space plane beyond which a depth-pass part's fragments cannot change a count
+/// inside `rect`: they change counts only in front of the stored depth, so nothing farther than
+/// its largest value there matters (the volume's sides running on behind the walls). Zero (no
+/// clipping) for depth-fail parts and where that bound is the far end of the depth range.
+fn depth_clip(depth: &DepthPyramid, rect: &Scissor, counting: Counting) -> [f32; 4] {
+    let Some(hi) = depth.farthest(rect) else {
+        return [0.0; 4];
+    };
+    // Window depth d is NDC z = 2d - 1 (glDepthRange 0..1); keep z/w <= zmax.
+    match counting {
+        Counting::ZPass if hi < 1.0 => [0.0, 0.0, -1.0, 2.0 * hi - 1.0],
+        _ => [0.0; 4],
+    }
 }
 
 pub struct LightVolumes {
@@ -111,9 +132,13 @@ pub struct PieceChoices<'a> {
     pub scissor: bool,
     /// `plan.truncate_volumes`: each part ends just past them.
     pub truncate: bool,
-    /// `plan.occlusion`: the frame's depth after the base pass; receivers it hides are left
-    /// out.
-    pub occlusion: Option<&'a DepthPyramid>,
+    /// The frame's depth after the base pass, when `occlusion` or `depth_clip` reads it.
+    pub depth: Option<&'a DepthPyramid>,
+    /// `plan.occlusion`: receivers the depth hides are left out.
+    pub occlusion: bool,
+    /// `plan.depth_clip`: each depth-pass part is clipped at the farthest depth within its
+    /// rectangle.
+    pub depth_clip: bool,
 }
 
 #[derive(Default)]
@@ -168,6 +193,7 @@ fn draws_of(parts: &[PartRange]) -> Vec<VolumeDraw> {
                 if d.counting == p.part.counting
                     && d.model == p.model
                     && d.scissor == p.scissor
+                    && d.depth_clip == p.depth_clip
                     && d.first + d.count == p.first =>
             {
                 d.count += count;
@@ -178,6 +204,7 @@ fn draws_of(parts: &[PartRange]) -> Vec<VolumeDraw> {
                 first: p.first,
                 count,
                 scissor: p.scissor,
+                depth_clip: p.depth_clip,
             }),
         }
     }
@@ -198,15 +225,16 @@ impl VolumeCache {
         let camera = pieces.camera;
         // Without receiver boxes (no caster culling) every part is built whole.
         let culling = !lp.volume_receivers.is_empty();
-        let receivers: std::borrow::Cow<[crate::scene::Aabb]> = match pieces.occlusion {
-            Some(depth) => lp
-                .volume_receivers
-                .iter()
-                .filter(|b| !depth.hides(camera, b))
-                .copied()
-                .collect(),
-            None => lp.volume_receivers.as_slice().into(),
-        };
+        let receivers: std::borrow::Cow<[crate::scene::Aabb]> =
+            match pieces.depth.filter(|_| pieces.occlusion) {
+                Some(depth) => lp
+                    .volume_receivers
+                    .iter()
+                    .filter(|b| !depth.hides(camera, b))
+                    .copied()
+                    .collect(),
+                None => lp.volume_receivers.as_slice().into(),
+            };
         let start = Instant::now();
         let groups = scene.caster_groups();
         let s = settings(o);
@@ -369,6 +397,13 @@ impl VolumeCache {
                 sides: mesh.side_vertices as i32,
                 caps: mesh.cap_vertices as i32,
                 scissor,
+                depth_clip: match pieces.depth.filter(|_| pieces.depth_clip) {
+                    Some(depth) => {
+                        let full = Scissor::full(camera);
+                        depth_clip(depth, &scissor.or(lp.scissor).unwrap_or(full), p.counting)
+                    }
+                    None => [0.0; 4],
+                },
             };
             key.hash(&mut layout);
             vertices.extend_from_slice(&mesh.vertices);
@@ -380,6 +415,9 @@ impl VolumeCache {
             drawn += 1;
             if mesh.truncated {
                 stats.parts_truncated += 1;
+            }
+            if range.depth_clip != [0.0; 4] {
+                stats.parts_depth_clipped += 1;
             }
             scissored += scissor.map_or(1.0, |s| {
                 s.area() as f64 / Scissor::full(camera).area().max(1) as f64

@@ -4,7 +4,7 @@
 //! it; casters whose shadow reaches only such receivers then drop out (see `shadow::volume`).
 
 use super::CameraSetup;
-use super::scissor::{Projection, project};
+use super::scissor::{Projection, Scissor, project};
 use crate::scene::Aabb;
 
 /// How far (in window depth) a box must lie behind the depth buffer to count as hidden: a few
@@ -91,6 +91,22 @@ impl DepthPyramid {
             }
         }
         m
+    }
+
+    /// The largest depth the buffer holds within `rect` (a bound: the pyramid level's texels
+    /// may reach past it), plus the rounding margin; None for an empty rectangle or one off the
+    /// image.
+    pub fn farthest(&self, rect: &Scissor) -> Option<f32> {
+        let base = &self.levels[0];
+        let (x1, y1) = (rect.x + rect.width - 1, rect.y + rect.height - 1);
+        if rect.area() == 0 || x1 < 0 || y1 < 0 {
+            return None;
+        }
+        let (x0, y0) = (rect.x.max(0) as usize, rect.y.max(0) as usize);
+        if x0 >= base.width || y0 >= base.height {
+            return None;
+        }
+        Some(self.max_over(x0, y0, x1 as usize, y1 as usize) + DEPTH_MARGIN)
     }
 
     /// Whether every pixel the box can cover shows a surface in front of the whole box, so no
@@ -208,5 +224,29 @@ mod tests {
                 assert_eq!(p.max_over(x0, y0, x1, y1), brute);
             }
         }
+    }
+
+    #[test]
+    fn the_farthest_depth_of_a_rectangle_bounds_its_pixels_and_clips_to_the_image() {
+        let (w, h) = (40usize, 30usize);
+        // Window rows bottom-up: depth grows with y, so a rectangle's farthest is its top row.
+        let top_down: Vec<f32> = (0..w * h).map(|i| (h - 1 - i / w) as f32 / 100.0).collect();
+        let p = DepthPyramid::from_top_down(&top_down, w, h).unwrap();
+        let rect = |x, y, width, height| Scissor {
+            x,
+            y,
+            width,
+            height,
+        };
+        let single = p.farthest(&rect(5, 7, 1, 1)).unwrap();
+        assert!((single - (0.07 + DEPTH_MARGIN)).abs() < 1e-7, "{single}");
+        let tall = p.farthest(&rect(2, 3, 4, 10)).unwrap();
+        assert!(tall >= 0.12 + DEPTH_MARGIN, "{tall}");
+        // Reaching past the image: clamped to it; wholly off it or empty: nothing.
+        let past = p.farthest(&rect(-10, 25, 100, 100)).unwrap();
+        assert!((past - (0.29 + DEPTH_MARGIN)).abs() < 1e-7, "{past}");
+        assert_eq!(p.farthest(&rect(50, 0, 10, 10)), None);
+        assert_eq!(p.farthest(&rect(-20, 0, 10, 10)), None);
+        assert_eq!(p.farthest(&rect(3, 3, 0, 5)), None);
     }
 }

@@ -343,7 +343,7 @@ impl<'a> Bench<'a> {
         bar.set_message(format!("{} option sets, round-robin", timed.len()));
         let mut renderers = Vec::with_capacity(timed.len());
         for (_, o) in &timed {
-            let mut r = Renderer::new(self.renderer.gl_handle(), o.width, o.height)?;
+            let mut r = self.renderer.sibling(o.width, o.height)?;
             r.load_scene(scene)?;
             for _ in 0..settings.warmup {
                 r.render_at(scene, &camera(0), o, FrameRequest::default())?;

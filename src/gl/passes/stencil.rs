@@ -41,6 +41,7 @@ fn draw_parts(gl: &glow::Context, program: &Program, v: &LightVolumes, counting:
                 super::set_scissor(gl, d.scissor);
             }
             program.set_mat4(gl, "u_model", &d.model);
+            program.set_vec4(gl, "u_depth_clip", glam::Vec4::from_array(d.depth_clip));
             gl.draw_arrays(glow::TRIANGLES, d.first, d.count);
         }
         gl.bind_vertex_array(None);
@@ -79,6 +80,8 @@ pub fn draw(
         if o.projection == VolumeProjection::DepthClamp {
             gl.enable(glow::DEPTH_CLAMP);
         }
+        // Each draw's depth clip plane (zero where it has none).
+        gl.enable(glow::CLIP_DISTANCE0);
     }
     program.bind(gl);
     program.set_mat4(gl, "u_view_proj", &ctx.plan.camera.view_proj);
@@ -126,6 +129,7 @@ pub fn draw(
         gl.stencil_op(glow::KEEP, glow::KEEP, glow::KEEP);
         gl.disable(glow::POLYGON_OFFSET_FILL);
         gl.disable(glow::DEPTH_CLAMP);
+        gl.disable(glow::CLIP_DISTANCE0);
         gl.color_mask(true, true, true, true);
     }
 }
