@@ -612,6 +612,11 @@ define_options! {
         /// Light an omni light's six spot maps in one pass, each fragment reading its face's
         /// map (the paper draws six passes; not with `shadow_map.outside = clip_planes`).
         merge_faces: bool = true;
+        /// Shadow-map an omni light with one cube map (`shadow_map.omni = cube`: one lookup,
+        /// one interpolated direction) instead of the paper's six spot maps, where both cover
+        /// the same directions (`fov_scale = 1`, not `outside = clip_planes`). Changes pixels:
+        /// each face's depth range is the cube's, not its own.
+        omni_cube: bool = true;
     }
 
     /// Lights and the unshadowed lighting model.

@@ -140,13 +140,12 @@ const VOLUMES_SAME: &[&str] = &[
     "shadow_volume.edge_rule=signed",
 ];
 
+/// Shadow maps' planner with an omni light's six spot maps, as the paper draws them (the cube
+/// of `plan.omni_cube` is tested on its own).
+const MAPS_SAME: &[&str] = &["technique=shadow_map", "plan.omni_cube=false"];
+
 fn check_scene(scene: &Scene, options: &Options, frames: usize, step: f32) {
-    let maps = planner_is_conservative(
-        scene,
-        &with(options, &["technique=shadow_map"]),
-        frames,
-        step,
-    );
+    let maps = planner_is_conservative(scene, &with(options, MAPS_SAME), frames, step);
     let volumes = planner_is_conservative(scene, &with(options, VOLUMES_SAME), frames, step);
     eprintln!("{}: maps {maps:?}\nvolumes {volumes:?}", scene.name);
     for (what, s) in [("maps", &maps), ("volumes", &volumes)] {
@@ -329,6 +328,51 @@ fn cached_volumes_follow_a_turning_camera() {
     assert!(reused > 0 && offscreen > 0 && shadowed_pixels > 1_000);
 }
 
+/// An omni light shadow-mapped with one cube map (`plan.omni_cube`) rather than six spot maps:
+/// other pixels (each face's depth range is the cube's), but every receiver decided and an
+/// error against the exact reference within a hair of the six spots'.
+#[test]
+fn omni_lights_as_cube_maps_are_as_accurate_as_six_spots() {
+    let (dm1, _, dm1_options) = load_scene_file("oa_dm1");
+    let builtin = (
+        shadowlab::scene::builtin::default_scene(),
+        Options::default(),
+    );
+    for (scene, options) in [builtin, (dm1, dm1_options)] {
+        let name = scene.name.clone();
+        let omni: Vec<usize> = (0..scene.lights.len())
+            .filter(|&l| scene.lights[l].kind == shadowlab::scene::LightKind::Omni)
+            .collect();
+        assert!(!omni.is_empty(), "{name} has no omni light");
+        let mut m = common::Measurer::new(scene, &options);
+        let cube = m.measure(&with(&options, &["technique=shadow_map"]));
+        let cube_textures = m.renderer().shadow_map_textures();
+        let six = m.measure(&with(&options, MAPS_SAME));
+        let all_textures = m.renderer().shadow_map_textures();
+        // Six spot maps where the cube took one texture (its slot becomes the first face's):
+        // the cube was what was drawn.
+        assert!(
+            all_textures >= cube_textures + 5,
+            "{name}: {cube_textures} textures with cubes, {all_textures} after six spots"
+        );
+        for &l in &omni {
+            assert_eq!(cube.light(l).receiver_mismatch, 0, "{name} light {l}");
+        }
+        let (c, s) = (cube.total.rates(), six.total.rates());
+        eprintln!(
+            "{name}: error excl. boundary cube {:.4}%, six spots {:.4}%",
+            100.0 * c.total_excl_boundary,
+            100.0 * s.total_excl_boundary
+        );
+        assert!(
+            c.total_excl_boundary <= s.total_excl_boundary + 0.0005,
+            "{name}: cube {} against six spots {}",
+            c.total_excl_boundary,
+            s.total_excl_boundary
+        );
+    }
+}
+
 /// The first light of `scene` whose range meets the view frustum but reaches no BSP leaf in
 /// view: a light behind a wall.
 fn light_behind_a_wall(scene: &Scene, options: &Options, camera: &Camera) -> Option<usize> {
@@ -401,6 +445,7 @@ fn a_light_outside_the_frustum_whose_shadow_reaches_into_view_is_kept() {
                 technique,
                 "plan.counting=false",
                 "plan.truncate_volumes=false",
+                "plan.omni_cube=false",
             ],
         );
         let (_ctx, mut r) = gl_on(BackendChoice::Egl, &o);
@@ -425,7 +470,7 @@ fn a_light_outside_the_frustum_whose_shadow_reaches_into_view_is_kept() {
 #[test]
 fn a_moving_model_invalidates_only_what_it_touches() {
     let (mut scene, _, options) = load_scene_file("oa_dm1");
-    let sm = with(&options, &["technique=shadow_map"]);
+    let sm = with(&options, MAPS_SAME);
     let sv = with(&options, VOLUMES_SAME);
     for o in [&sm, &sv] {
         let (_ctx, mut r) = gl_on(BackendChoice::Egl, o);

@@ -155,8 +155,10 @@ fn filters_soften_only_the_boundary() {
 #[test]
 fn depth_precision_and_near_far_fitting() {
     let mut m = Measurer::new(builtin::default_scene(), &options_with(&[SM]));
+    // Each of the omni light's six spot views fits its own range: not the planner's cube,
+    // which has one range for all six (`plan.omni_cube`).
     let e = |m: &mut Measurer, sets: &[&str]| {
-        let mut all = vec![SM];
+        let mut all = vec![SM, "plan.omni_cube=false"];
         all.extend_from_slice(sets);
         m.measure(&options_with(&all)).total.rates().total
     };
@@ -283,7 +285,13 @@ fn six_spot_lights_cover_the_omni_light_without_seams() {
     let mut m = Measurer::new(builtin::default_scene(), &options_with(&[SM]));
     for omni in ["six_spots", "cube"] {
         let set = format!("shadow_map.omni={omni}");
-        let r = m.measure(&options_with(&[SM, &set, "lighting.only=1"]));
+        // The planner's cube would stand in for the six spots (`plan.omni_cube`).
+        let r = m.measure(&options_with(&[
+            SM,
+            &set,
+            "lighting.only=1",
+            "plan.omni_cube=false",
+        ]));
         let c = r.light(1);
         println!(
             "omni as {omni}: {} receivers, {} unassigned, error {}",

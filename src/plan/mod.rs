@@ -8,7 +8,9 @@ pub mod frustum;
 pub mod occlusion;
 pub mod scissor;
 
-use crate::options::{CountingMode, Options, Technique, VolumeProjection};
+use crate::options::{
+    CountingMode, OmniMode, Options, ShadowMapOptions, Technique, VolumeProjection,
+};
 use crate::q3::vis::VisStats;
 use crate::scene::{Aabb, Camera, Scene, SurfaceOwner};
 use crate::shadow::projection;
@@ -291,6 +293,22 @@ impl Plan {
         let groups = uses_volumes.then(|| scene.caster_groups());
         let p = &options.plan;
         let on = p.enabled;
+        // `plan.omni_cube`: where six spots and a cube cover the same directions (no narrowed
+        // field of view, no clip planes), an omni light's maps are the faces of one cube map.
+        let sm = &options.shadow_map;
+        let map_options = if on
+            && p.omni_cube
+            && sm.omni == OmniMode::SixSpots
+            && sm.fov_scale == 1.0
+            && sm.outside != crate::options::Outside::ClipPlanes
+        {
+            ShadowMapOptions {
+                omni: OmniMode::Cube,
+                ..sm.clone()
+            }
+        } else {
+            sm.clone()
+        };
         // The planner culls pieces of at most CHUNK_TRIANGLES; the paper's frame, components.
         let chunked = on && p.cull_casters;
         let components: Vec<(usize, usize, Aabb)> = groups
@@ -400,9 +418,9 @@ impl Plan {
             };
             match technique {
                 Technique::ShadowMap => {
-                    plan.views = shadow_views(l, &caster_bounds, &options.shadow_map);
+                    plan.views = shadow_views(l, &caster_bounds, &map_options);
                     let sm_key = hash_of((
-                        format!("{:?}", options.shadow_map),
+                        format!("{:?}", map_options),
                         order,
                         mat_bits(&Mat4::from_translation(pos)),
                         radius.to_bits(),
