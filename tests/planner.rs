@@ -8,6 +8,7 @@ mod common;
 use common::{gl_on, load_asset, load_scene_file};
 use glam::{Mat4, Vec3};
 use shadowlab::frame::{Frame, MaskValue};
+use shadowlab::gl::volumes::VolumeStats;
 use shadowlab::gl::{FrameRequest, Renderer};
 use shadowlab::options::{BackendChoice, Options, Technique};
 use shadowlab::plan::Plan;
@@ -203,6 +204,39 @@ fn depth_pass_where_safe_changes_at_most_edge_pixels() {
     assert!(share < 0.002, "{differing} pixels differ ({share})");
 }
 
+/// Renders a six-frame camera path with `base` and with `changed` (each on its own renderer, the
+/// caches warm) and asserts that `changed` made its decision (`applied` counts the parts it
+/// touched, none under `base`) and changed under 1e-5 of the receiver pixels.
+fn changes_at_most_edge_pixels(
+    scene: &Scene,
+    base: &Options,
+    changed: &Options,
+    what: &str,
+    applied: fn(&VolumeStats) -> usize,
+) {
+    let (_ctx, mut r) = gl_on(BackendChoice::Egl, base);
+    let mut c = Renderer::new(_ctx.gl.clone(), base.width, base.height).unwrap();
+    r.load_scene(scene).unwrap();
+    c.load_scene(scene).unwrap();
+    let (mut differing, mut total, mut parts) = (0, 0, 0);
+    for cam in camera_path(&scene.camera, 6, 48.0) {
+        let a = c.render_at(scene, &cam, changed, masks()).unwrap();
+        let b = r.render_at(scene, &cam, base, masks()).unwrap();
+        parts += a.volumes.iter().map(applied).sum::<usize>();
+        assert_eq!(b.volumes.iter().map(applied).sum::<usize>(), 0);
+        differing += mask_differences(&a, &b).iter().map(|d| d.1).sum::<usize>();
+        total += receivers(&b);
+    }
+    let name = &scene.name;
+    let share = differing as f64 / total.max(1) as f64;
+    eprintln!("{name}: {parts} {what} parts, {differing} of {total} receiver pixels differ");
+    assert!(parts > 0, "{name}: no part {what}");
+    assert!(
+        share < 0.00001,
+        "{name}: {differing} of {total} pixels differ"
+    );
+}
+
 /// Depth-pass parts clipped at the farthest depth of their rectangle (`plan.depth_clip`): the
 /// fragments clipped away would fail the depth test, so only pixels where a clipped edge
 /// rasterises differently may change; along camera paths with the caches warm.
@@ -219,36 +253,9 @@ fn depth_clipped_volumes_change_at_most_edge_pixels() {
             ],
         );
         let clipped = with(&whole, &["plan.depth_clip=true"]);
-        let (_ctx, mut r) = gl_on(BackendChoice::Egl, &whole);
-        let mut c = Renderer::new(_ctx.gl.clone(), whole.width, whole.height).unwrap();
-        r.load_scene(&scene).unwrap();
-        c.load_scene(&scene).unwrap();
-        let (mut differing, mut total, mut parts) = (0, 0, 0);
-        for cam in camera_path(&scene.camera, 6, 48.0) {
-            let a = c.render_at(&scene, &cam, &clipped, masks()).unwrap();
-            let b = r.render_at(&scene, &cam, &whole, masks()).unwrap();
-            parts += a
-                .volumes
-                .iter()
-                .map(|v| v.parts_depth_clipped)
-                .sum::<usize>();
-            assert_eq!(
-                b.volumes
-                    .iter()
-                    .map(|v| v.parts_depth_clipped)
-                    .sum::<usize>(),
-                0
-            );
-            differing += mask_differences(&a, &b).iter().map(|d| d.1).sum::<usize>();
-            total += receivers(&b);
-        }
-        let share = differing as f64 / total.max(1) as f64;
-        eprintln!("{name}: {parts} clipped parts, {differing} of {total} receiver pixels differ");
-        assert!(parts > 0, "{name}: nothing was clipped");
-        assert!(
-            share < 0.00001,
-            "{name}: {differing} of {total} pixels differ"
-        );
+        changes_at_most_edge_pixels(&scene, &whole, &clipped, "clipped", |v| {
+            v.parts_depth_clipped
+        });
     }
 }
 
@@ -266,33 +273,9 @@ fn truncated_volumes_change_at_most_edge_pixels() {
     for (scene, options) in [builtin, (dm1, dm1_options), (wrack, wrack_options)] {
         let whole = with(&options, VOLUMES_SAME);
         let truncated = with(&whole, &["plan.truncate_volumes=true"]);
-        let (_ctx, mut r) = gl_on(BackendChoice::Egl, &whole);
-        let mut t = Renderer::new(_ctx.gl.clone(), whole.width, whole.height).unwrap();
-        r.load_scene(&scene).unwrap();
-        t.load_scene(&scene).unwrap();
-        let (mut differing, mut total, mut parts) = (0, 0, 0);
-        for cam in camera_path(&scene.camera, 6, 48.0) {
-            let a = t.render_at(&scene, &cam, &truncated, masks()).unwrap();
-            let b = r.render_at(&scene, &cam, &whole, masks()).unwrap();
-            parts += a.volumes.iter().map(|v| v.parts_truncated).sum::<usize>();
-            assert_eq!(
-                b.volumes.iter().map(|v| v.parts_truncated).sum::<usize>(),
-                0
-            );
-            differing += mask_differences(&a, &b).iter().map(|d| d.1).sum::<usize>();
-            total += receivers(&b);
-        }
-        let share = differing as f64 / total.max(1) as f64;
-        eprintln!(
-            "{}: {parts} truncated parts, {differing} of {total} receiver pixels differ",
-            scene.name
-        );
-        assert!(parts > 0, "{}: nothing was truncated", scene.name);
-        assert!(
-            share < 0.00001,
-            "{}: {differing} of {total} pixels differ",
-            scene.name
-        );
+        changes_at_most_edge_pixels(&scene, &whole, &truncated, "truncated", |v| {
+            v.parts_truncated
+        });
     }
 }
 
