@@ -98,15 +98,18 @@ impl DepthPyramid {
     /// image.
     pub fn farthest(&self, rect: &Scissor) -> Option<f32> {
         let base = &self.levels[0];
-        let (x1, y1) = (rect.x + rect.width - 1, rect.y + rect.height - 1);
-        if rect.area() == 0 || x1 < 0 || y1 < 0 {
+        let image = Scissor {
+            x: 0,
+            y: 0,
+            width: base.width as i32,
+            height: base.height as i32,
+        };
+        let r = rect.intersect(&image);
+        if r.area() == 0 {
             return None;
         }
-        let (x0, y0) = (rect.x.max(0) as usize, rect.y.max(0) as usize);
-        if x0 >= base.width || y0 >= base.height {
-            return None;
-        }
-        Some(self.max_over(x0, y0, x1 as usize, y1 as usize) + DEPTH_MARGIN)
+        let (x1, y1) = (r.x + r.width - 1, r.y + r.height - 1);
+        Some(self.max_over(r.x as usize, r.y as usize, x1 as usize, y1 as usize) + DEPTH_MARGIN)
     }
 
     /// Whether every pixel the box can cover shows a surface in front of the whole box, so no
