@@ -484,7 +484,7 @@ impl<'a> Bench<'a> {
         for c in configs {
             bar.set_message(c.label());
             // A configuration without shadows is its own baseline.
-            let (off_ms, m) = if !interleaved.is_empty() {
+            let (off_ms, m) = if self.settings.interleave {
                 let m = timed(&c.options);
                 let off = if c.options.technique == Technique::None {
                     m.frame_ms.clone()
