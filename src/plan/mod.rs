@@ -309,6 +309,7 @@ impl Plan {
         } else {
             sm.clone()
         };
+        let map_options_text = format!("{map_options:?}");
         // The planner culls pieces of at most CHUNK_TRIANGLES; the paper's frame, components.
         let chunked = on && p.cull_casters;
         let components: Vec<(usize, usize, Aabb)> = groups
@@ -420,7 +421,7 @@ impl Plan {
                 Technique::ShadowMap => {
                     plan.views = shadow_views(l, &caster_bounds, &map_options);
                     let sm_key = hash_of((
-                        format!("{:?}", map_options),
+                        &map_options_text,
                         order,
                         mat_bits(&Mat4::from_translation(pos)),
                         radius.to_bits(),
