@@ -11,10 +11,31 @@ use std::ffi::CStr;
 
 const SOFTWARE_DEVICE_EXTENSION: &str = "EGL_MESA_device_software";
 
-/// Keeps the EGL display and context alive while GL is in use.
+/// Keeps the EGL display and context alive while GL is in use; on drop releases the context
+/// from this thread, then destroys it.
 pub struct EglHolder {
-    _context: PossiblyCurrentContext,
+    context: Option<PossiblyCurrentContext>,
     _display: Display,
+}
+
+impl Drop for EglHolder {
+    fn drop(&mut self) {
+        if let Some(context) = self.context.take() {
+            release(context);
+        }
+    }
+}
+
+/// Makes `context` not current (only where it is current on this thread: releasing is
+/// thread-wide and would unbind another context) and destroys it. A context destroyed while
+/// current stays alive, still current, until its thread exits, and the thread-exit cleanup
+/// of such a context crashed test threads (SIGSEGV) when each test ends on its own thread.
+fn release(context: PossiblyCurrentContext) {
+    use glutin::context::PossiblyCurrentGlContext;
+    if context.is_current() {
+        // An error leaves nothing to undo: the context is destroyed on drop either way.
+        let _ = context.make_not_current();
+    }
 }
 
 /// A current surfaceless GL 3.3 core context on the best EGL device.
@@ -70,7 +91,7 @@ fn create_on(device: &Device) -> Result<EglContext, String> {
     };
     Ok(EglContext {
         holder: EglHolder {
-            _context: context,
+            context: Some(context),
             _display: display,
         },
         gl,

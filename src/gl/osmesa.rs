@@ -23,6 +23,7 @@ type CreateContextAttribs = unsafe extern "C" fn(*const c_int, OsMesaContext) ->
 type MakeCurrent = unsafe extern "C" fn(OsMesaContext, *mut c_void, c_uint, c_int, c_int) -> u8;
 type GetProcAddress = unsafe extern "C" fn(*const c_char) -> *const c_void;
 type DestroyContext = unsafe extern "C" fn(OsMesaContext);
+type GetCurrentContext = unsafe extern "C" fn() -> OsMesaContext;
 
 /// Library names tried in order.
 pub const LIBRARY_NAMES: [&str; 3] = ["libOSMesa.so.8", "libOSMesa.so.6", "libOSMesa.so"];
@@ -31,6 +32,8 @@ const BUFFER_SIDE: usize = 16;
 /// Keeps the library, the context and its buffer alive while GL is in use.
 pub struct OsMesaHolder {
     context: OsMesaContext,
+    make_current: MakeCurrent,
+    current: GetCurrentContext,
     destroy: DestroyContext,
     _buffer: Vec<u8>,
     // Dropped last: the function pointers above point into it.
@@ -39,8 +42,15 @@ pub struct OsMesaHolder {
 
 impl Drop for OsMesaHolder {
     fn drop(&mut self) {
-        // SAFETY: the context was created by this library and is destroyed once.
-        unsafe { (self.destroy)(self.context) };
+        // SAFETY: the context was created by this library and is destroyed once; it is
+        // released first where it is current on this thread (OSMesaMakeCurrent(NULL, NULL)
+        // unbinds), as the EGL path does (see `egl::release`).
+        unsafe {
+            if (self.current)() == self.context {
+                (self.make_current)(std::ptr::null_mut(), std::ptr::null_mut(), 0, 0, 0);
+            }
+            (self.destroy)(self.context)
+        };
     }
 }
 
@@ -71,7 +81,7 @@ fn load_library(override_path: Option<&str>) -> Result<(Library, String), String
 pub fn create(library: Option<&str>) -> Result<OsMesaContextBundle, String> {
     let (library, name) = load_library(library)?;
     // SAFETY: the symbol types match GL/osmesa.h.
-    let (create_attribs, make_current, get_proc, destroy) = unsafe {
+    let (create_attribs, make_current, get_proc, destroy, current) = unsafe {
         let c: libloading::Symbol<CreateContextAttribs> = library
             .get(b"OSMesaCreateContextAttribs\0")
             .map_err(|e| format!("{name} lacks OSMesaCreateContextAttribs: {e}"))?;
@@ -84,7 +94,10 @@ pub fn create(library: Option<&str>) -> Result<OsMesaContextBundle, String> {
         let d: libloading::Symbol<DestroyContext> = library
             .get(b"OSMesaDestroyContext\0")
             .map_err(|e| format!("{name} lacks OSMesaDestroyContext: {e}"))?;
-        (*c, *m, *g, *d)
+        let cur: libloading::Symbol<GetCurrentContext> = library
+            .get(b"OSMesaGetCurrentContext\0")
+            .map_err(|e| format!("{name} lacks OSMesaGetCurrentContext: {e}"))?;
+        (*c, *m, *g, *d, *cur)
     };
     let attributes: [c_int; 13] = [
         OSMESA_FORMAT,
@@ -122,6 +135,8 @@ pub fn create(library: Option<&str>) -> Result<OsMesaContextBundle, String> {
     // From here on the holder owns the context, so every early return destroys it.
     let holder = OsMesaHolder {
         context,
+        make_current,
+        current,
         destroy,
         _buffer: buffer,
         _library: library,

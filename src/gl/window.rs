@@ -6,7 +6,7 @@
 use glutin::config::{ConfigTemplateBuilder, GlConfig};
 use glutin::context::{
     ContextApi, ContextAttributesBuilder, GlProfile, NotCurrentGlContext, PossiblyCurrentContext,
-    Version,
+    PossiblyCurrentGlContext, Version,
 };
 use glutin::display::{GetGlDisplay, GlDisplay};
 use glutin::surface::{GlSurface, Surface, SwapInterval, WindowSurface};
@@ -28,6 +28,15 @@ pub struct WindowGl {
     pub context: PossiblyCurrentContext,
     // Dropped after the surface and context that refer to it.
     pub window: Window,
+}
+
+impl Drop for WindowGl {
+    fn drop(&mut self) {
+        // Released before it is destroyed, as the EGL path does (see `egl::release`).
+        if self.context.is_current() {
+            let _ = self.context.make_not_current_in_place();
+        }
+    }
 }
 
 impl WindowGl {

@@ -131,8 +131,9 @@ pub fn floor_quad(cx: f32, cy: f32, half: f32, z: f32) -> shadowlab::scene::shap
 /// (computed once: the G-buffer does not depend on the shadow technique).
 pub struct Measurer {
     pub scene: Scene,
-    ctx: shadowlab::gl::GlContext,
+    // Dropped before the context its GL objects live in.
     renderer: shadowlab::gl::Renderer,
+    ctx: shadowlab::gl::GlContext,
     reference: shadowlab::truth::Reference,
     exact: std::collections::HashMap<(u32, u32, usize), shadowlab::frame::Mask>,
 }
