@@ -607,6 +607,11 @@ define_options! {
         /// piece whose shadow cannot hold the camera (Doom 3's test) and that is not
         /// alpha-tested, depth-fail the others (as `counting = auto`; `zpass` stays `zpass`).
         counting: bool = true;
+        /// Refine that test (and `counting = auto`'s): a piece counts depth-fail only if one
+        /// of its facing triangles meets the hull of the light and the camera's near-plane
+        /// rectangle, not whenever its box, grown by the near distance, holds the light or the
+        /// eye or meets the segment between them.
+        near_plane_test: bool = true;
         /// Reuse a shadow map while its light, view and casters stay as they were.
         cache_maps: bool = true;
         /// Light an omni light's six spot maps in one pass, each fragment reading its face's

@@ -259,6 +259,19 @@ fn depth_clipped_volumes_change_at_most_edge_pixels() {
     }
 }
 
+/// Depth-pass wherever the near-plane test allows (`plan.counting` with its default
+/// `plan.near_plane_test`): against depth-fail everywhere, only pixels where depth-pass
+/// rasterises other polygons may change; along camera paths, with the caches warm.
+#[test]
+fn depth_pass_by_the_near_plane_test_changes_at_most_edge_pixels() {
+    for name in ["oa_dm1", "wrackdm17"] {
+        let (scene, _, options) = load_scene_file(name);
+        let zfail = with(&options, VOLUMES_SAME);
+        let chosen = with(&zfail, &["plan.counting=true", "plan.near_plane_test=true"]);
+        changes_at_most_edge_pixels(&scene, &zfail, &chosen, "depth-pass", |v| v.zpass_parts);
+    }
+}
+
 /// Volumes ending just past their receivers (`plan.truncate_volumes`): the same shadows but for
 /// pixels where the shorter sides, rasterised from other end points, fall differently on a
 /// pixel centre; along camera paths on the three scenes, with the caches warm.

@@ -331,6 +331,13 @@ impl Plan {
         );
         let eye = camera_setup.position;
         let near = camera.near;
+        // The near plane's rectangle, grown by a tenth about its centre against rounding in
+        // the rasteriser's clipping (`plan.near_plane_test`).
+        let near_quad = {
+            let inv = camera_setup.view_proj.inverse();
+            [(-1.0, -1.0), (1.0, -1.0), (1.0, 1.0), (-1.0, 1.0)]
+                .map(|(x, y)| inv.project_point3(Vec3::new(x * 1.1, y * 1.1, -1.0)))
+        };
         let screen = (camera_setup.width as f64 * camera_setup.height as f64).max(1.0);
         let mut lights = Vec::new();
         let mut culled = Vec::new();
@@ -543,9 +550,22 @@ impl Plan {
                         let counting = if counting_auto {
                             // A ray seen through an alpha-tested caster's holes enters its
                             // volume through the front cap, which depth-pass does not draw.
-                            if volume::potentially_inside_shadow(&bounds, eye, pos, near)
-                                || alpha_caster_bounds.iter().any(|b| b.intersects(&bounds))
-                            {
+                            let alpha = alpha_caster_bounds.iter().any(|b| b.intersects(&bounds));
+                            let near_shadowed = || {
+                                volume::potentially_inside_shadow(&bounds, eye, pos, near)
+                                    && (!(on && p.near_plane_test) || {
+                                        let g = &groups.as_ref().expect("volumes").groups[group];
+                                        near_plane_in_shadow(
+                                            scene,
+                                            g,
+                                            (component, chunked),
+                                            pos,
+                                            &near_quad,
+                                            options.shadow_volume.facing_epsilon,
+                                        )
+                                    })
+                            };
+                            if alpha || near_shadowed() {
                                 Counting::ZFail
                             } else {
                                 Counting::ZPass
@@ -611,4 +631,30 @@ impl Plan {
 /// Inverse transpose of the upper 3x3: transforms normals of a model with scaling.
 pub fn normal_matrix(model: &Mat4) -> Mat3 {
     Mat3::from_mat4(*model).inverse().transpose()
+}
+
+/// `plan.near_plane_test` for one piece (a chunk, or a component when not `chunked`) of caster
+/// group `g`: whether the camera's near-plane rectangle `near_quad` (world space) may lie in
+/// its shadow from a light at `light`, tested in the group's own space.
+fn near_plane_in_shadow(
+    scene: &Scene,
+    g: &volume::CasterGroup,
+    (index, chunked): (usize, bool),
+    light: Vec3,
+    near_quad: &[Vec3; 4],
+    facing_epsilon: f32,
+) -> bool {
+    let to_local = volume::group_transform(scene, g.owner).inverse();
+    let piece = if chunked {
+        &g.chunks[index]
+    } else {
+        &g.components[index]
+    };
+    volume::near_plane_shadowed(
+        g,
+        piece,
+        to_local.transform_point3(light).as_dvec3(),
+        &near_quad.map(|q| to_local.transform_point3(q).as_dvec3()),
+        facing_epsilon,
+    )
 }

@@ -361,6 +361,70 @@ pub fn potentially_inside_shadow(bounds: &Aabb, eye: Vec3, light: Vec3, near: f3
     true
 }
 
+/// Whether the camera's near-plane rectangle `quad` (corners in order, in the group's space)
+/// may lie in the shadow volume of `piece` for a light at `light`: whether some facing
+/// triangle meets the hull of the light and the rectangle (every segment from the light to a
+/// near-plane point lies in it). A separating-axis test per facing triangle, exact for the
+/// convex hull; touching counts as meeting. When false, depth-pass counts start at zero on the
+/// near plane for this piece.
+pub fn near_plane_shadowed(
+    group: &CasterGroup,
+    piece: &Component,
+    light: DVec3,
+    quad: &[DVec3; 4],
+    epsilon: f32,
+) -> bool {
+    let hull = [light, quad[0], quad[1], quad[2], quad[3]];
+    let hull_edges: [DVec3; 8] = [
+        quad[0] - light,
+        quad[1] - light,
+        quad[2] - light,
+        quad[3] - light,
+        quad[1] - quad[0],
+        quad[2] - quad[1],
+        quad[3] - quad[2],
+        quad[0] - quad[3],
+    ];
+    let mut hull_faces = vec![(quad[1] - quad[0]).cross(quad[3] - quad[0])];
+    for i in 0..4 {
+        hull_faces.push(hull_edges[i].cross(hull_edges[(i + 1) % 4]));
+    }
+    let c = &group.connectivity;
+    let facing = facing_flags_of(group, piece, light, epsilon);
+    let separated = |axis: DVec3, tri: &[DVec3; 3]| -> bool {
+        if axis.length_squared() == 0.0 {
+            return false;
+        }
+        let (mut hmin, mut hmax) = (f64::INFINITY, f64::NEG_INFINITY);
+        for p in &hull {
+            let d = axis.dot(*p);
+            hmin = hmin.min(d);
+            hmax = hmax.max(d);
+        }
+        let (mut tmin, mut tmax) = (f64::INFINITY, f64::NEG_INFINITY);
+        for p in tri {
+            let d = axis.dot(*p);
+            tmin = tmin.min(d);
+            tmax = tmax.max(d);
+        }
+        hmax < tmin || tmax < hmin
+    };
+    piece.triangles.iter().any(|&t| {
+        if !facing[t as usize] {
+            return false;
+        }
+        let tri = c.triangles[t as usize].map(|v| c.positions[v as usize].as_dvec3());
+        let tri_edges = [tri[1] - tri[0], tri[2] - tri[1], tri[0] - tri[2]];
+        let normal = tri_edges[0].cross(tri_edges[1]);
+        if separated(normal, &tri) || hull_faces.iter().any(|&n| separated(n, &tri)) {
+            return false;
+        }
+        !hull_edges
+            .iter()
+            .any(|h| tri_edges.iter().any(|e| separated(h.cross(*e), &tri)))
+    })
+}
+
 /// How volumes are built.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct VolumeSettings {
@@ -846,6 +910,127 @@ mod tests {
             light,
             1.0
         ));
+    }
+
+    #[test]
+    fn the_triangle_near_plane_test_is_conservative_and_finer_than_the_box() {
+        // A 20x20 floor facing up at z = 5 and a cube on it; the light just above the floor.
+        let mut t = vec![
+            [
+                Vec3::new(-10.0, -10.0, 5.0),
+                Vec3::new(10.0, -10.0, 5.0),
+                Vec3::new(10.0, 10.0, 5.0),
+            ],
+            [
+                Vec3::new(-10.0, -10.0, 5.0),
+                Vec3::new(10.0, 10.0, 5.0),
+                Vec3::new(-10.0, 10.0, 5.0),
+            ],
+        ];
+        t.extend(tris(&cuboid(
+            Vec3::new(2.0, 2.0, 5.0),
+            Vec3::new(3.0, 3.0, 6.0),
+            1.0,
+        )));
+        let g = CasterGroup::build(SurfaceOwner::World, t);
+        let piece = Component {
+            triangles: (0..g.connectivity.triangles.len() as u32).collect(),
+            edges: Vec::new(),
+            bounds: g
+                .components
+                .iter()
+                .fold(Aabb::EMPTY, |b, c| b.union(&c.bounds)),
+        };
+        let light = DVec3::new(0.0, 0.0, 5.5);
+        let quad_at = |c: DVec3, half: f64| {
+            [(-1.0, -1.0), (1.0, -1.0), (1.0, 1.0), (-1.0, 1.0)]
+                .map(|(x, y)| c + DVec3::new(x * half, y * half, 0.0))
+        };
+        // Above the floor, beside the cube: the box test says depth-fail, the triangles say no
+        // segment from the light to the near plane crosses a facing triangle.
+        let open = quad_at(DVec3::new(-6.0, 0.0, 7.0), 0.1);
+        assert!(potentially_inside_shadow(
+            &piece.bounds,
+            open[0].as_vec3(),
+            light.as_vec3(),
+            0.1
+        ));
+        assert!(!near_plane_shadowed(&g, &piece, light, &open, 0.0));
+        // Below the floor, and behind the cube: in shadow.
+        assert!(near_plane_shadowed(
+            &g,
+            &piece,
+            light,
+            &quad_at(DVec3::new(0.0, 0.0, 2.0), 0.1),
+            0.0
+        ));
+        assert!(near_plane_shadowed(
+            &g,
+            &piece,
+            light,
+            &quad_at(DVec3::new(5.0, 5.0, 6.5), 0.1),
+            0.0
+        ));
+        // Never false where a point of the rectangle is in shadow (random rectangles, points
+        // on a grid over each, segments against every facing triangle).
+        let facing = facing_flags_of(&g, &piece, light, 0.0);
+        let crosses = |q: DVec3| {
+            piece
+                .triangles
+                .iter()
+                .filter(|&&t| facing[t as usize])
+                .any(|&t| {
+                    let [a, b, c] = g.connectivity.triangles[t as usize]
+                        .map(|v| g.connectivity.positions[v as usize].as_dvec3());
+                    segment_hits_triangle(light, q, a, b, c)
+                })
+        };
+        let mut seed = 12345u64;
+        let mut rnd = || {
+            seed = seed
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            (seed >> 11) as f64 / (1u64 << 53) as f64
+        };
+        let (mut shadowed, mut refined) = (0, 0);
+        for _ in 0..400 {
+            let c = DVec3::new(rnd() * 24.0 - 12.0, rnd() * 24.0 - 12.0, rnd() * 6.0 + 2.0);
+            let quad = quad_at(c, 0.05 + rnd() * 0.5);
+            let any = (0..=4).any(|i| {
+                (0..=4).any(|j| {
+                    let (u, v) = (i as f64 / 4.0, j as f64 / 4.0);
+                    crosses(quad[0].lerp(quad[1], u).lerp(quad[3].lerp(quad[2], u), v))
+                })
+            });
+            let test = near_plane_shadowed(&g, &piece, light, &quad, 0.0);
+            assert!(
+                test || !any,
+                "rectangle at {c} is in shadow but the test says not"
+            );
+            shadowed += any as usize;
+            refined += (!test) as usize;
+        }
+        assert!(
+            shadowed > 20 && refined > 100,
+            "{shadowed} shadowed, {refined} refined"
+        );
+    }
+
+    /// Whether the segment p→q crosses triangle abc (Möller–Trumbore, edges included).
+    fn segment_hits_triangle(p: DVec3, q: DVec3, a: DVec3, b: DVec3, c: DVec3) -> bool {
+        let d = q - p;
+        let (e1, e2) = (b - a, c - a);
+        let h = d.cross(e2);
+        let det = e1.dot(h);
+        if det.abs() < 1e-12 {
+            return false;
+        }
+        let s = (p - a) / det;
+        let u = s.dot(h);
+        let qv = s.cross(e1);
+        let v = d.dot(qv);
+        let t = e2.dot(qv);
+        (0.0..=1.0).contains(&u) && v >= 0.0 && u + v <= 1.0 && (0.0..=1.0).contains(&t)
     }
 
     /// Generalised winding number of the closed triangle soup `vertices` (w = 1) at `p`: the
