@@ -331,9 +331,12 @@ impl Plan {
         );
         let eye = camera_setup.position;
         let near = camera.near;
-        // The near plane's rectangle, grown by a tenth about its centre against rounding in
-        // the rasteriser's clipping (`plan.near_plane_test`).
-        let near_quad = {
+        // Where depth-pass counts start (`plan.near_plane_test`): the near plane's rectangle,
+        // grown by a tenth about its centre against rounding in the rasteriser's clipping; under
+        // depth clamping nothing is near-clipped, so counts start at the eye.
+        let near_quad = if options.shadow_volume.projection == VolumeProjection::DepthClamp {
+            [eye; 4]
+        } else {
             let inv = camera_setup.view_proj.inverse();
             [(-1.0, -1.0), (1.0, -1.0), (1.0, 1.0), (-1.0, 1.0)]
                 .map(|(x, y)| inv.project_point3(Vec3::new(x * 1.1, y * 1.1, -1.0)))
@@ -554,15 +557,16 @@ impl Plan {
                             let near_shadowed = || {
                                 volume::potentially_inside_shadow(&bounds, eye, pos, near)
                                     && (!(on && p.near_plane_test) || {
-                                        let g = &groups.as_ref().expect("volumes").groups[group];
-                                        near_plane_in_shadow(
-                                            scene,
-                                            g,
-                                            (component, chunked),
-                                            pos,
-                                            &near_quad,
-                                            options.shadow_volume.facing_epsilon,
-                                        )
+                                        groups.as_ref().is_none_or(|gs| {
+                                            near_plane_in_shadow(
+                                                scene,
+                                                &gs.groups[group],
+                                                (component, chunked),
+                                                pos,
+                                                &near_quad,
+                                                options.shadow_volume.facing_epsilon,
+                                            )
+                                        })
                                     })
                             };
                             if alpha || near_shadowed() {

@@ -971,6 +971,21 @@ mod tests {
             &quad_at(DVec3::new(5.0, 5.0, 6.5), 0.1),
             0.0
         ));
+        // A point (the eye, under depth clamping): the segment to the light alone.
+        assert!(near_plane_shadowed(
+            &g,
+            &piece,
+            light,
+            &[DVec3::new(0.0, 0.0, 2.0); 4],
+            0.0
+        ));
+        assert!(!near_plane_shadowed(
+            &g,
+            &piece,
+            light,
+            &[DVec3::new(-6.0, 0.0, 7.0); 4],
+            0.0
+        ));
         // Never false where a point of the rectangle is in shadow (random rectangles, points
         // on a grid over each, segments against every facing triangle).
         let facing = facing_flags_of(&g, &piece, light, 0.0);
