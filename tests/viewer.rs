@@ -192,7 +192,8 @@ fn the_viewer_drives_the_builtin_scene_and_oa_dm1_from_scripts() {
     println!(
         "oa_dm1: maps against volumes differ in {technique_px} px, the overlay changes {overlay_px} of {total}"
     );
-    // Both techniques shadow nearly the same pixels; the translucent volumes tint a large part.
+    // Both techniques shadow nearly the same pixels; the translucent volumes tint a large part
+    // (a twentieth at least: the planner's depth-pass pieces have no caps to show, only sides).
     assert!(technique_px > 0 && technique_px < total / 5);
-    assert!(overlay_px > total / 10);
+    assert!(overlay_px > total / 20);
 }
