@@ -942,6 +942,7 @@ mod tests {
                 .fold(Aabb::EMPTY, |b, c| b.union(&c.bounds)),
         };
         let light = DVec3::new(0.0, 0.0, 5.5);
+        let near_test = |quad: &[DVec3; 4]| near_plane_shadowed(&g, &piece, light, quad, 0.0);
         let quad_at = |c: DVec3, half: f64| {
             [(-1.0, -1.0), (1.0, -1.0), (1.0, 1.0), (-1.0, 1.0)]
                 .map(|(x, y)| c + DVec3::new(x * half, y * half, 0.0))
@@ -955,37 +956,13 @@ mod tests {
             light.as_vec3(),
             0.1
         ));
-        assert!(!near_plane_shadowed(&g, &piece, light, &open, 0.0));
+        assert!(!near_test(&open));
         // Below the floor, and behind the cube: in shadow.
-        assert!(near_plane_shadowed(
-            &g,
-            &piece,
-            light,
-            &quad_at(DVec3::new(0.0, 0.0, 2.0), 0.1),
-            0.0
-        ));
-        assert!(near_plane_shadowed(
-            &g,
-            &piece,
-            light,
-            &quad_at(DVec3::new(5.0, 5.0, 6.5), 0.1),
-            0.0
-        ));
+        assert!(near_test(&quad_at(DVec3::new(0.0, 0.0, 2.0), 0.1)));
+        assert!(near_test(&quad_at(DVec3::new(5.0, 5.0, 6.5), 0.1)));
         // A point (the eye, under depth clamping): the segment to the light alone.
-        assert!(near_plane_shadowed(
-            &g,
-            &piece,
-            light,
-            &[DVec3::new(0.0, 0.0, 2.0); 4],
-            0.0
-        ));
-        assert!(!near_plane_shadowed(
-            &g,
-            &piece,
-            light,
-            &[DVec3::new(-6.0, 0.0, 7.0); 4],
-            0.0
-        ));
+        assert!(near_test(&[DVec3::new(0.0, 0.0, 2.0); 4]));
+        assert!(!near_test(&[DVec3::new(-6.0, 0.0, 7.0); 4]));
         // Never false where a point of the rectangle is in shadow (random rectangles, points
         // on a grid over each, segments against every facing triangle).
         let facing = facing_flags_of(&g, &piece, light, 0.0);
@@ -1017,7 +994,7 @@ mod tests {
                     crosses(quad[0].lerp(quad[1], u).lerp(quad[3].lerp(quad[2], u), v))
                 })
             });
-            let test = near_plane_shadowed(&g, &piece, light, &quad, 0.0);
+            let test = near_test(&quad);
             assert!(
                 test || !any,
                 "rectangle at {c} is in shadow but the test says not"
