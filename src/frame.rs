@@ -69,6 +69,8 @@ pub struct StencilImage {
     pub width: u32,
     pub height: u32,
     pub values: Vec<u8>,
+    /// Whether the counts wrap modulo 256 (255 is then -1), rather than saturating.
+    pub wraps: bool,
 }
 
 /// Time spent in one pass of a frame.

@@ -596,13 +596,17 @@ define_options! {
         /// work every receiver whose box it hides wholly (a max-depth pyramid, as a GPU's
         /// hierarchical Z): casters that shadow only hidden receivers drop out.
         occlusion: bool = true;
-        /// Clip each depth-pass shadow-volume part's stencil draw (gl_ClipDistance) at the
-        /// farthest depth the depth buffer holds within its rectangle (read after the base
-        /// pass): fragments beyond it would fail the depth test, so they are not rasterised.
-        /// A depth bounds test applied to the volume. Depth-fail parts are left whole: the
-        /// mirror clip (nothing nearer than the nearest stored depth) is as exact in theory but
-        /// broke counts on llvmpipe.
+        /// Clip each depth-pass shadow-volume part's stencil draw (gl_ClipDistance) behind the
+        /// depth buffer within its rectangle (read after the base pass): fragments there would
+        /// fail the depth test, so they are not rasterised. A depth bounds test applied to the
+        /// volume. Depth-fail parts are left whole: the mirror clip (nothing nearer than the
+        /// nearest stored depth) is as exact in theory but broke counts on llvmpipe.
         depth_clip: bool = true;
+        /// Clip planes per part for `depth_clip`, chosen greedily among the farthest depth in
+        /// the rectangle and tilted planes fitted to the depth of the whole, its halves,
+        /// quarters and ninths, each lifted above every pixel; the draw keeps what lies under
+        /// all of them (see `plan::depth_bounds`).
+        depth_clip_planes: u32 = 4, in 1 ..= 4;
         /// Under `shadow_volume.counting = zfail`, count depth-pass, without caps, each caster
         /// piece whose shadow cannot hold the camera (Doom 3's test) and that is not
         /// alpha-tested, depth-fail the others (as `counting = auto`; `zpass` stays `zpass`).
@@ -612,6 +616,11 @@ define_options! {
         /// rectangle, not whenever its box, grown by the near distance, holds the light or the
         /// eye or meets the segment between them.
         near_plane_test: bool = true;
+        /// Count each light's volumes in one pass with glStencilOpSeparate and wrapping
+        /// operations (GL 2.0 core), instead of `shadow_volume.stencil`'s two culled passes:
+        /// each volume is transformed, clipped and set up once instead of twice. The same
+        /// counts, modulo 256 rather than saturating at 0 and 255.
+        one_pass_stencil: bool = true;
         /// Reuse a shadow map while its light, view and casters stay as they were.
         cache_maps: bool = true;
         /// Light an omni light's six spot maps in one pass, each fragment reading its face's

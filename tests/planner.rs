@@ -131,11 +131,13 @@ struct Saved {
 }
 
 /// Shadow volumes' planner without the depth-pass choice, which is exact in theory but
-/// rasterises differently, and with the signed edge rule: the paper's rule leaks where two
+/// rasterises differently, with the paper's two saturating stencil passes (one wrapping pass
+/// differs where a count goes below zero, tested on its own), and with the signed edge rule: the paper's rule leaks where two
 /// facing triangles of opposite winding share an edge, and culling one of them closes the leak
 /// (both tested below on their own).
 const VOLUMES_SAME: &[&str] = &[
     "technique=shadow_volume",
+    "plan.one_pass_stencil=false",
     "plan.counting=false",
     "plan.truncate_volumes=false",
     "shadow_volume.edge_rule=signed",
@@ -204,15 +206,20 @@ fn depth_pass_where_safe_changes_at_most_edge_pixels() {
     assert!(share < 0.002, "{differing} pixels differ ({share})");
 }
 
+/// Volume parts of a frame `count` says yes to, summed over lights.
+fn parts(f: &Frame, count: fn(&VolumeStats) -> usize) -> usize {
+    f.volumes.iter().map(count).sum()
+}
+
 /// Renders a six-frame camera path with `base` and with `changed` (each on its own renderer, the
-/// caches warm) and asserts that `changed` made its decision (`applied` counts the parts it
-/// touched, none under `base`) and changed under 1e-5 of the receiver pixels.
+/// caches warm) and asserts that `changed` made its decision (`applied` counts the parts or
+/// lights it touched, none under `base`) and changed under 1e-5 of the receiver pixels.
 fn changes_at_most_edge_pixels(
     scene: &Scene,
     base: &Options,
     changed: &Options,
     what: &str,
-    applied: fn(&VolumeStats) -> usize,
+    applied: fn(&Frame) -> usize,
 ) {
     let (_ctx, mut r) = gl_on(BackendChoice::Egl, base);
     let mut c = Renderer::new(_ctx.gl.clone(), base.width, base.height).unwrap();
@@ -222,15 +229,15 @@ fn changes_at_most_edge_pixels(
     for cam in camera_path(&scene.camera, 6, 48.0) {
         let a = c.render_at(scene, &cam, changed, masks()).unwrap();
         let b = r.render_at(scene, &cam, base, masks()).unwrap();
-        parts += a.volumes.iter().map(applied).sum::<usize>();
-        assert_eq!(b.volumes.iter().map(applied).sum::<usize>(), 0);
+        parts += applied(&a);
+        assert_eq!(applied(&b), 0);
         differing += mask_differences(&a, &b).iter().map(|d| d.1).sum::<usize>();
         total += receivers(&b);
     }
     let name = &scene.name;
     let share = differing as f64 / total.max(1) as f64;
-    eprintln!("{name}: {parts} {what} parts, {differing} of {total} receiver pixels differ");
-    assert!(parts > 0, "{name}: no part {what}");
+    eprintln!("{name}: {parts} {what}, {differing} of {total} receiver pixels differ");
+    assert!(parts > 0, "{name}: no {what}");
     assert!(
         share < 0.00001,
         "{name}: {differing} of {total} pixels differ"
@@ -253,8 +260,24 @@ fn depth_clipped_volumes_change_at_most_edge_pixels() {
             ],
         );
         let clipped = with(&whole, &["plan.depth_clip=true"]);
-        changes_at_most_edge_pixels(&scene, &whole, &clipped, "clipped", |v| {
-            v.parts_depth_clipped
+        changes_at_most_edge_pixels(&scene, &whole, &clipped, "clipped parts", |f| {
+            parts(f, |v| v.parts_depth_clipped)
+        });
+    }
+}
+
+/// Counting in one wrapping pass (`plan.one_pass_stencil`) instead of the paper's two
+/// saturating passes: the same counts unless one goes below zero (a front face counted without
+/// its back face, where the paper's edge rule leaves a volume open) or past 255, which
+/// saturation clamps and wrapping does not; along camera paths, with the caches warm.
+#[test]
+fn one_pass_stencil_changes_at_most_edge_pixels() {
+    for name in ["oa_dm1", "wrackdm17"] {
+        let (scene, _, options) = load_scene_file(name);
+        let two = with(&options, VOLUMES_SAME);
+        let one = with(&two, &["plan.one_pass_stencil=true"]);
+        changes_at_most_edge_pixels(&scene, &two, &one, "lights counted in one pass", |f| {
+            (f.plan_stats.stencil_passes == 1) as usize * f.volumes.len()
         });
     }
 }
@@ -268,7 +291,9 @@ fn depth_pass_by_the_near_plane_test_changes_at_most_edge_pixels() {
         let (scene, _, options) = load_scene_file(name);
         let zfail = with(&options, VOLUMES_SAME);
         let chosen = with(&zfail, &["plan.counting=true", "plan.near_plane_test=true"]);
-        changes_at_most_edge_pixels(&scene, &zfail, &chosen, "depth-pass", |v| v.zpass_parts);
+        changes_at_most_edge_pixels(&scene, &zfail, &chosen, "depth-pass parts", |f| {
+            parts(f, |v| v.zpass_parts)
+        });
     }
 }
 
@@ -286,8 +311,8 @@ fn truncated_volumes_change_at_most_edge_pixels() {
     for (scene, options) in [builtin, (dm1, dm1_options), (wrack, wrack_options)] {
         let whole = with(&options, VOLUMES_SAME);
         let truncated = with(&whole, &["plan.truncate_volumes=true"]);
-        changes_at_most_edge_pixels(&scene, &whole, &truncated, "truncated", |v| {
-            v.parts_truncated
+        changes_at_most_edge_pixels(&scene, &whole, &truncated, "truncated parts", |f| {
+            parts(f, |v| v.parts_truncated)
         });
     }
 }

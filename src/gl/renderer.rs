@@ -679,7 +679,11 @@ impl Renderer {
             camera: &plan.camera,
             depth: depth.as_ref(),
             occlusion: options.plan.occlusion,
-            depth_clip: options.plan.depth_clip,
+            depth_clip: if options.plan.depth_clip {
+                options.plan.depth_clip_planes as usize
+            } else {
+                0
+            },
             scissor: options.plan.enabled && options.plan.piece_scissor,
             truncate: options.plan.enabled && options.plan.truncate_volumes,
         };
@@ -749,10 +753,10 @@ impl Renderer {
                         let (w, h) = (self.target.width, self.target.height);
                         let values = debug::read_stencil(gl, self.target.fbo, w, h);
                         self.target.bind(gl);
+                        let wraps = options.shadow_volume.wrap == StencilWrap::Wrap
+                            || plan.stencil == StencilPasses::Separate;
                         if stop {
-                            let wrap = options.shadow_volume.wrap == StencilWrap::Wrap
-                                || options.shadow_volume.stencil == StencilPasses::Separate;
-                            let image = debug::stencil_image(&values, w, h, wrap);
+                            let image = debug::stencil_image(&values, w, h, wraps);
                             return self.stopped(gl, plan, stepper, image, volume_stats, start);
                         }
                         stencil_image = Some(StencilImage {
@@ -760,6 +764,7 @@ impl Renderer {
                             width: w,
                             height: h,
                             values,
+                            wraps,
                         });
                     }
                     self.timer.begin(gl, format!("light{}.lit", lp.light));

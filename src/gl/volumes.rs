@@ -3,6 +3,7 @@
 //! caching is off.
 
 use crate::options::ShadowVolumeOptions;
+use crate::plan::depth_bounds::{DepthBound, MAX_PLANES};
 use crate::plan::occlusion::DepthPyramid;
 use crate::plan::scissor::{Scissor, points_scissor};
 use crate::plan::{CameraSetup, LightPlan, VolumePart};
@@ -64,7 +65,7 @@ pub struct PartRange {
     /// Where its stencil draw may change counts (None: the light's rectangle).
     pub scissor: Option<Scissor>,
     /// A clip-space plane its stencil draw is clipped to (`gl_ClipDistance`; zero: none).
-    pub depth_clip: [f32; 4],
+    pub depth_clip: [[f32; 4]; MAX_PLANES],
 }
 
 impl PartRange {
@@ -84,21 +85,24 @@ pub struct VolumeDraw {
     /// Sides, then (depth-fail) caps, of every part in it.
     pub count: i32,
     pub scissor: Option<Scissor>,
-    pub depth_clip: [f32; 4],
+    pub depth_clip: [[f32; 4]; MAX_PLANES],
 }
 
-/// The clip-space plane beyond which a depth-pass part's fragments cannot change a count
-/// inside `rect`: they change counts only in front of the stored depth, so nothing farther than
-/// its largest value there matters (the volume's sides running on behind the walls). Zero (no
-/// clipping) for depth-fail parts and where that bound is the far end of the depth range.
-fn depth_clip(depth: &DepthPyramid, rect: &Scissor, counting: Counting) -> [f32; 4] {
-    let Some(hi) = depth.farthest(rect) else {
-        return [0.0; 4];
-    };
-    // Window depth d is NDC z = 2d - 1 (glDepthRange 0..1); keep z/w <= zmax.
+/// The clip-space planes beyond which a depth-pass part's fragments cannot change a count
+/// inside `rect`: they change counts only in front of the stored depth, so nothing behind a
+/// bound on it there matters (the volume's sides running on behind the walls). Zero (no
+/// clipping) for depth-fail parts and where no bound is nearer than the far plane.
+fn depth_clip(
+    depth: &DepthPyramid,
+    camera: &CameraSetup,
+    rect: &Scissor,
+    counting: Counting,
+    planes: usize,
+) -> [[f32; 4]; MAX_PLANES] {
     match counting {
-        Counting::ZPass if hi < 1.0 => [0.0, 0.0, -1.0, 2.0 * hi - 1.0],
-        _ => [0.0; 4],
+        Counting::ZPass => DepthBound::fit(depth, camera, rect, planes)
+            .map_or([[0.0; 4]; MAX_PLANES], |b| b.clip_planes()),
+        Counting::ZFail => [[0.0; 4]; MAX_PLANES],
     }
 }
 
@@ -136,9 +140,9 @@ pub struct PieceChoices<'a> {
     pub depth: Option<&'a DepthPyramid>,
     /// `plan.occlusion`: receivers the depth hides are left out.
     pub occlusion: bool,
-    /// `plan.depth_clip`: each depth-pass part is clipped at the farthest depth within its
-    /// rectangle.
-    pub depth_clip: bool,
+    /// `plan.depth_clip`: each depth-pass part is clipped behind the depth buffer within its
+    /// rectangle by up to this many planes (`plan.depth_clip_planes`; 0: not clipped).
+    pub depth_clip: usize,
 }
 
 #[derive(Default)]
@@ -397,12 +401,18 @@ impl VolumeCache {
                 sides: mesh.side_vertices as i32,
                 caps: mesh.cap_vertices as i32,
                 scissor,
-                depth_clip: match pieces.depth.filter(|_| pieces.depth_clip) {
+                depth_clip: match pieces.depth.filter(|_| pieces.depth_clip > 0) {
                     Some(depth) => {
                         let full = Scissor::full(camera);
-                        depth_clip(depth, &scissor.or(lp.scissor).unwrap_or(full), p.counting)
+                        depth_clip(
+                            depth,
+                            camera,
+                            &scissor.or(lp.scissor).unwrap_or(full),
+                            p.counting,
+                            pieces.depth_clip,
+                        )
                     }
-                    None => [0.0; 4],
+                    None => [[0.0; 4]; MAX_PLANES],
                 },
             };
             key.hash(&mut layout);
@@ -416,7 +426,7 @@ impl VolumeCache {
             if mesh.truncated {
                 stats.parts_truncated += 1;
             }
-            if range.depth_clip != [0.0; 4] {
+            if range.depth_clip != [[0.0; 4]; MAX_PLANES] {
                 stats.parts_depth_clipped += 1;
             }
             scissored += scissor.map_or(1.0, |s| {

@@ -4,12 +4,13 @@
 
 pub mod auto;
 pub mod cull;
+pub mod depth_bounds;
 pub mod frustum;
 pub mod occlusion;
 pub mod scissor;
 
 use crate::options::{
-    CountingMode, OmniMode, Options, ShadowMapOptions, Technique, VolumeProjection,
+    CountingMode, OmniMode, Options, ShadowMapOptions, StencilPasses, Technique, VolumeProjection,
 };
 use crate::q3::vis::VisStats;
 use crate::scene::{Aabb, Camera, Scene, SurfaceOwner};
@@ -153,6 +154,9 @@ pub struct PlanStats {
     pub scissor_fraction: f64,
     pub zpass_parts: usize,
     pub zfail_parts: usize,
+    /// Stencil passes per light's volumes: 2 (the paper's culled passes) or 1
+    /// (`plan.one_pass_stencil`, or `shadow_volume.stencil = separate`).
+    pub stencil_passes: usize,
     /// Per light `auto` decided for: "light i: technique (why)".
     pub choices: Vec<String>,
 }
@@ -166,6 +170,9 @@ pub struct Plan {
     /// Per surface: drawn into shadow maps and volumes.
     pub casters: Vec<bool>,
     pub lights: Vec<LightPlan>,
+    /// How the stencil pass counts volumes (`shadow_volume.stencil`, or one pass under
+    /// `plan.one_pass_stencil`).
+    pub stencil: StencilPasses,
     /// Enabled lights the planner culled (their masks are empty).
     pub culled: Vec<usize>,
     pub stats: PlanStats,
@@ -621,11 +628,21 @@ impl Plan {
         } else {
             scissor_sum / lights.len() as f64
         };
+        let stencil = if on && p.one_pass_stencil {
+            StencilPasses::Separate
+        } else {
+            options.shadow_volume.stencil
+        };
+        stats.stencil_passes = match stencil {
+            StencilPasses::TwoPass => 2,
+            StencilPasses::Separate => 1,
+        };
         Plan {
             camera: camera_setup,
             visible,
             casters,
             lights,
+            stencil,
             culled,
             stats,
         }

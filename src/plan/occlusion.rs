@@ -10,7 +10,7 @@ use crate::scene::Aabb;
 /// How far (in window depth) a box must lie behind the depth buffer to count as hidden: a few
 /// hundred steps of a 24-bit buffer, against rounding in the rasterised depth and in the box's
 /// projection.
-const DEPTH_MARGIN: f32 = 1.0 / (1 << 16) as f32;
+pub(crate) const DEPTH_MARGIN: f32 = 1.0 / (1 << 16) as f32;
 
 /// Max-depth mip chain of a depth image (window depth, 0 near .. 1 far).
 #[derive(Debug)]
@@ -31,6 +31,14 @@ impl Level {
     fn at(&self, x: usize, y: usize) -> f32 {
         self.max[y * self.width + x]
     }
+}
+
+/// Pixels `x.0..=x.1`, `y.0..=y.1` (GL window coordinates) and a bound on the depth they hold.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct DepthBlock {
+    pub x: (usize, usize),
+    pub y: (usize, usize),
+    pub max: f32,
 }
 
 impl DepthPyramid {
@@ -91,6 +99,43 @@ impl DepthPyramid {
             }
         }
         m
+    }
+
+    /// The rectangle `rect` (clipped to the image) as the texels of the finest level where it
+    /// spans at most `span` texels each way: each with the pixels of the rectangle it covers
+    /// and the largest depth it holds (which may reach past the rectangle: a bound). Empty for
+    /// an empty rectangle or one off the image.
+    pub fn blocks(&self, rect: &Scissor, span: usize) -> Vec<DepthBlock> {
+        let base = &self.levels[0];
+        let image = Scissor {
+            x: 0,
+            y: 0,
+            width: base.width as i32,
+            height: base.height as i32,
+        };
+        let r = rect.intersect(&image);
+        if r.area() == 0 {
+            return Vec::new();
+        }
+        let (x0, y0) = (r.x as usize, r.y as usize);
+        let (x1, y1) = (x0 + r.width as usize - 1, y0 + r.height as usize - 1);
+        let longest = (x1 - x0).max(y1 - y0) + 1;
+        let mut k = 0;
+        while k + 1 < self.levels.len() && (longest >> k) > span.max(1) {
+            k += 1;
+        }
+        let l = &self.levels[k];
+        let mut blocks = Vec::new();
+        for ty in (y0 >> k)..=(y1 >> k).min(l.height - 1) {
+            for tx in (x0 >> k)..=(x1 >> k).min(l.width - 1) {
+                blocks.push(DepthBlock {
+                    x: ((tx << k).max(x0), ((tx + 1) << k).min(x1 + 1) - 1),
+                    y: ((ty << k).max(y0), ((ty + 1) << k).min(y1 + 1) - 1),
+                    max: l.at(tx, ty),
+                });
+            }
+        }
+        blocks
     }
 
     /// The largest depth the buffer holds within `rect` (a bound: the pyramid level's texels

@@ -15,7 +15,7 @@ use crate::frame::{Frame, Rgba};
 use crate::gl::debug;
 use crate::gl::window::{WindowGl, open_window_gl};
 use crate::gl::{RenderError, Renderer};
-use crate::options::{Options, StencilPasses, StencilWrap};
+use crate::options::Options;
 use crate::scene::Scene;
 use error_job::ErrorJob;
 use glow::HasContext;
@@ -214,10 +214,8 @@ impl App {
                     None
                 }),
             ViewMode::Stencil => r.frame.as_ref().and_then(|f| f.stencil.as_ref()).map(|s| {
-                let wrap = state.options.shadow_volume.wrap == StencilWrap::Wrap
-                    || state.options.shadow_volume.stencil == StencilPasses::Separate;
                 (
-                    debug::stencil_image(&s.values, s.width, s.height, wrap),
+                    debug::stencil_image(&s.values, s.width, s.height, s.wraps),
                     format!(
                         "light {}'s stencil counts (blue 1 … red 8+, magenta negative)",
                         s.light

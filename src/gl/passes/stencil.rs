@@ -10,6 +10,7 @@ use super::PassContext;
 use crate::gl::program::Program;
 use crate::gl::volumes::LightVolumes;
 use crate::options::{StencilPasses, StencilWrap, VolumeProjection};
+use crate::plan::depth_bounds::MAX_PLANES;
 use crate::plan::scissor::Scissor;
 use crate::shadow::volume::Counting;
 use glow::HasContext;
@@ -32,6 +33,14 @@ fn face_op(counting: Counting, op: u32) -> (u32, u32, u32) {
     }
 }
 
+/// The volume shader's clip plane uniforms, one per `gl_ClipDistance`.
+const DEPTH_CLIP_UNIFORMS: [&str; MAX_PLANES] = [
+    "u_depth_clip[0]",
+    "u_depth_clip[1]",
+    "u_depth_clip[2]",
+    "u_depth_clip[3]",
+];
+
 fn draw_parts(gl: &glow::Context, program: &Program, v: &LightVolumes, counting: Counting) {
     // SAFETY: the light's own vertex array; ranges lie inside its buffer.
     unsafe {
@@ -41,7 +50,9 @@ fn draw_parts(gl: &glow::Context, program: &Program, v: &LightVolumes, counting:
                 super::set_scissor(gl, d.scissor);
             }
             program.set_mat4(gl, "u_model", &d.model);
-            program.set_vec4(gl, "u_depth_clip", glam::Vec4::from_array(d.depth_clip));
+            for (name, plane) in DEPTH_CLIP_UNIFORMS.iter().zip(&d.depth_clip) {
+                program.set_vec4(gl, name, glam::Vec4::from_array(*plane));
+            }
             gl.draw_arrays(glow::TRIANGLES, d.first, d.count);
         }
         gl.bind_vertex_array(None);
@@ -80,12 +91,15 @@ pub fn draw(
         if o.projection == VolumeProjection::DepthClamp {
             gl.enable(glow::DEPTH_CLAMP);
         }
-        // Each draw's depth clip plane (zero where it has none).
-        gl.enable(glow::CLIP_DISTANCE0);
+        // Each draw's depth clip planes (zero where it has none).
+        for i in 0..MAX_PLANES as u32 {
+            gl.enable(glow::CLIP_DISTANCE0 + i);
+        }
     }
     program.bind(gl);
     program.set_mat4(gl, "u_view_proj", &ctx.plan.camera.view_proj);
-    let (incr, decr) = ops(o.wrap, o.stencil);
+    let passes = ctx.plan.stencil;
+    let (incr, decr) = ops(o.wrap, passes);
     for counting in [Counting::ZFail, Counting::ZPass] {
         if !volumes.draws.iter().any(|d| d.counting == counting) {
             continue;
@@ -97,7 +111,7 @@ pub fn draw(
         };
         // SAFETY: fixed-function state; draws our own buffers.
         unsafe {
-            match o.stencil {
+            match passes {
                 StencilPasses::TwoPass => {
                     gl.enable(glow::CULL_FACE);
                     for (face, op) in [(incr_face, incr), (decr_face, decr)] {
@@ -129,7 +143,9 @@ pub fn draw(
         gl.stencil_op(glow::KEEP, glow::KEEP, glow::KEEP);
         gl.disable(glow::POLYGON_OFFSET_FILL);
         gl.disable(glow::DEPTH_CLAMP);
-        gl.disable(glow::CLIP_DISTANCE0);
+        for i in 0..MAX_PLANES as u32 {
+            gl.disable(glow::CLIP_DISTANCE0 + i);
+        }
         gl.color_mask(true, true, true, true);
     }
 }
