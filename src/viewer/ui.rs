@@ -514,8 +514,11 @@ fn timings(ui: &mut egui::Ui, state: &ViewerState, frame: &Frame) {
         let caps: usize = frame.volumes.iter().map(|v| v.cap_triangles).sum();
         let zpass: usize = frame.volumes.iter().map(|v| v.zpass_parts).sum();
         let zfail: usize = frame.volumes.iter().map(|v| v.zfail_parts).sum();
+        let clipped: usize = frame.volumes.iter().map(|v| v.parts_depth_clipped).sum();
         ui.label(format!(
-            "volumes: {quads} quads, {caps} cap triangles, {zfail} z-fail / {zpass} z-pass parts"
+            "volumes: {quads} quads, {caps} cap triangles, {zfail} z-fail / {zpass} z-pass parts \
+             ({clipped} depth-clipped), {} stencil pass(es)",
+            p.stencil_passes
         ));
     }
     // Frame-time graph.
