@@ -81,16 +81,21 @@ impl DepthPyramid {
         Some(DepthPyramid { levels })
     }
 
+    /// The finest level where `pixels` span at most `texels` texels.
+    fn level_for(&self, pixels: usize, texels: usize) -> usize {
+        let mut k = 0;
+        while k + 1 < self.levels.len() && (pixels >> k) > texels.max(1) {
+            k += 1;
+        }
+        k
+    }
+
     /// The largest depth over the pixels `x0..=x1`, `y0..=y1` (GL window coordinates, clamped
     /// to the image), from the level where the rectangle spans at most 4×4 texels.
     fn max_over(&self, x0: usize, y0: usize, x1: usize, y1: usize) -> f32 {
         let base = &self.levels[0];
         let (x1, y1) = (x1.min(base.width - 1), y1.min(base.height - 1));
-        let span = (x1 - x0).max(y1 - y0) + 1;
-        let mut k = 0;
-        while k + 1 < self.levels.len() && (span >> k) > 4 {
-            k += 1;
-        }
+        let k = self.level_for((x1 - x0).max(y1 - y0) + 1, 4);
         let l = &self.levels[k];
         let mut m = 0.0f32;
         for y in (y0 >> k)..=(y1 >> k).min(l.height - 1) {
@@ -119,11 +124,7 @@ impl DepthPyramid {
         }
         let (x0, y0) = (r.x as usize, r.y as usize);
         let (x1, y1) = (x0 + r.width as usize - 1, y0 + r.height as usize - 1);
-        let longest = (x1 - x0).max(y1 - y0) + 1;
-        let mut k = 0;
-        while k + 1 < self.levels.len() && (longest >> k) > span.max(1) {
-            k += 1;
-        }
+        let k = self.level_for((x1 - x0).max(y1 - y0) + 1, span);
         let l = &self.levels[k];
         let mut blocks = Vec::new();
         for ty in (y0 >> k)..=(y1 >> k).min(l.height - 1) {
@@ -142,19 +143,12 @@ impl DepthPyramid {
     /// may reach past it), plus the rounding margin; None for an empty rectangle or one off the
     /// image.
     pub fn farthest(&self, rect: &Scissor) -> Option<f32> {
-        let base = &self.levels[0];
-        let image = Scissor {
-            x: 0,
-            y: 0,
-            width: base.width as i32,
-            height: base.height as i32,
-        };
-        let r = rect.intersect(&image);
-        if r.area() == 0 {
-            return None;
-        }
-        let (x1, y1) = (r.x + r.width - 1, r.y + r.height - 1);
-        Some(self.max_over(r.x as usize, r.y as usize, x1 as usize, y1 as usize) + DEPTH_MARGIN)
+        // The texels `max_over` would read: those of the level spanning at most 4×4.
+        self.blocks(rect, 4)
+            .iter()
+            .map(|b| b.max)
+            .reduce(f32::max)
+            .map(|m| m + DEPTH_MARGIN)
     }
 
     /// Whether every pixel the box can cover shows a surface in front of the whole box, so no
