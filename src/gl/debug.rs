@@ -1,9 +1,27 @@
 //! Reading buffers back as images for the debug views and the walkthrough: depth (of the frame
 //! or a shadow map) as grey, stencil counts as a heat map.
 
-use super::target::{flip_rows, read_pixels};
+use super::target::{flip_rows, read_pixels, read_pixels_bottom_up};
 use crate::frame::Rgba;
 use glow::HasContext;
+
+/// The depth values of a framebuffer's `w`×`h` corner in GL's row order (bottom row first),
+/// as the depth pyramid takes them.
+pub fn read_depth_bottom_up(
+    gl: &glow::Context,
+    fbo: glow::Framebuffer,
+    w: u32,
+    h: u32,
+) -> Vec<f32> {
+    read_pixels_bottom_up(
+        gl,
+        Some(fbo),
+        None,
+        (w, h),
+        (glow::DEPTH_COMPONENT, glow::FLOAT),
+        1,
+    )
+}
 
 /// The depth values of a framebuffer's `w`×`h` corner, top row first.
 pub fn read_depth(gl: &glow::Context, fbo: glow::Framebuffer, w: u32, h: u32) -> Vec<f32> {

@@ -666,8 +666,8 @@ impl Renderer {
             self.timer.end(gl);
             let t = Instant::now();
             let (w, h) = (self.target.width, self.target.height);
-            let values = debug::read_depth(gl, self.target.fbo, w, h);
-            let pyramid = DepthPyramid::from_top_down(&values, w as usize, h as usize);
+            let values = debug::read_depth_bottom_up(gl, self.target.fbo, w, h);
+            let pyramid = DepthPyramid::from_bottom_up(values, w as usize, h as usize);
             self.timer
                 .record_cpu("occlusion", t.elapsed().as_secs_f64() * 1e3);
             self.target.bind(gl);

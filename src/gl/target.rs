@@ -168,6 +168,21 @@ pub fn read_pixels<T: Copy + Default>(
     gl: &glow::Context,
     fbo: Option<glow::Framebuffer>,
     buffer: Option<u32>,
+    size: (u32, u32),
+    format: (u32, u32),
+    per_pixel: usize,
+) -> Vec<T> {
+    let mut data = read_pixels_bottom_up(gl, fbo, buffer, size, format, per_pixel);
+    flip_rows(&mut data, size.0 as usize * per_pixel);
+    data
+}
+
+/// [`read_pixels`] in GL's row order (bottom row first), for readers that work in window
+/// coordinates.
+pub fn read_pixels_bottom_up<T: Copy + Default>(
+    gl: &glow::Context,
+    fbo: Option<glow::Framebuffer>,
+    buffer: Option<u32>,
     (w, h): (u32, u32),
     (format, ty): (u32, u32),
     per_pixel: usize,
@@ -197,7 +212,6 @@ pub fn read_pixels<T: Copy + Default>(
         );
         gl.bind_framebuffer(glow::READ_FRAMEBUFFER, None);
     }
-    flip_rows(&mut data, w * per_pixel);
     data
 }
 

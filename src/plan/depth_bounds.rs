@@ -46,19 +46,22 @@ struct Sample {
     max: f64,
 }
 
+/// The blocks that show a surface, bounded by their surface pixels' depth: a pixel still at
+/// the clear (sky, a hole to the void) has no surface whose count anyone reads, so the bound
+/// need not lie above it.
 fn samples(blocks: &[DepthBlock], width: u32, height: u32) -> Vec<Sample> {
     let u = |px: usize| (px as f64 + 0.5) / width as f64 * 2.0 - 1.0;
     let v = |py: usize| (py as f64 + 0.5) / height as f64 * 2.0 - 1.0;
     blocks
         .iter()
-        .map(|b| {
+        .filter_map(|b| {
             let (u0, u1, v0, v1) = (u(b.x.0), u(b.x.1), v(b.y.0), v(b.y.1));
-            Sample {
+            Some(Sample {
                 corners: [(u0, v0), (u1, v0), (u0, v1), (u1, v1)],
                 centre: ((u0 + u1) * 0.5, (v0 + v1) * 0.5),
                 weight: ((b.x.1 - b.x.0 + 1) * (b.y.1 - b.y.0 + 1)) as f64,
-                max: b.max as f64 + DEPTH_MARGIN as f64,
-            }
+                max: b.surface? as f64 + DEPTH_MARGIN as f64,
+            })
         })
         .collect()
 }
@@ -316,13 +319,18 @@ mod tests {
         }
     }
 
-    /// Over the rectangle's pixels: the least of bound − depth, and the mean of it.
+    /// Over the rectangle's pixels that show a surface (nearer than the far plane): the least
+    /// of bound − depth, and the mean of it.
     fn gaps(b: &DepthBound, depth: &[f32], r: &Scissor) -> (f32, f32) {
         let (mut least, mut sum, mut n) = (f32::MAX, 0.0, 0);
         for y in r.y.max(0)..(r.y + r.height).min(H as i32) {
             for x in r.x.max(0)..(r.x + r.width).min(W as i32) {
+                let d = depth[y as usize * W as usize + x as usize];
+                if d >= 1.0 {
+                    continue;
+                }
                 let (u, v) = ndc(x as usize, y as usize);
-                let gap = b.at(u, v) - depth[y as usize * W as usize + x as usize];
+                let gap = b.at(u, v) - d;
                 least = least.min(gap);
                 sum += gap;
                 n += 1;
@@ -408,6 +416,26 @@ mod tests {
         // Nothing nearer than the far plane: nothing to clip.
         let (p, _) = pyramid(|_, _| 1.0);
         assert_eq!(DepthBound::fit(&p, &cam, &all, MAX_PLANES), None);
+    }
+
+    #[test]
+    fn pixels_at_the_far_plane_leave_the_bound_free_there() {
+        let cam = camera();
+        let all = rect(0, 0, W as i32, H as i32);
+        // A slanted wall below a horizon, sky (the clear, 1.0) above it.
+        let wall = |u: f32, v: f32| if v < 0.2 { 0.5 + 0.2 * u } else { 1.0 };
+        let (p, d) = pyramid(wall);
+        let bound = DepthBound::fit(&p, &cam, &all, MAX_PLANES).unwrap();
+        let (least, mean) = gaps(&bound, &d, &all);
+        // Above every wall pixel, and close to it (the wall spans 0.3..0.7).
+        assert!(least >= DEPTH_MARGIN * 0.5, "{least}");
+        assert!(mean < 0.05, "{mean}");
+        // Over the sky the bound is free: here it stays below the far plane.
+        let (u, v) = ndc(W as usize / 2, H as usize - 1);
+        assert!(bound.at(u, v) < 0.9, "{}", bound.at(u, v));
+        // A rectangle wholly in the sky gets no bound.
+        let sky = rect(0, H as i32 - 10, W as i32, 10);
+        assert_eq!(DepthBound::fit(&p, &cam, &sky, MAX_PLANES), None);
     }
 
     #[test]

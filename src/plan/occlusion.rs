@@ -25,7 +25,13 @@ struct Level {
     width: usize,
     height: usize,
     max: Vec<f32>,
+    /// The same over pixels that show a surface (nearer than the far plane, where the clear
+    /// left 1.0: sky, holes); [`NO_SURFACE`] where none does.
+    surface: Vec<f32>,
 }
+
+/// A texel of [`Level::surface`] without any surface pixel under it.
+const NO_SURFACE: f32 = f32::NEG_INFINITY;
 
 impl Level {
     fn at(&self, x: usize, y: usize) -> f32 {
@@ -39,44 +45,70 @@ pub struct DepthBlock {
     pub x: (usize, usize),
     pub y: (usize, usize),
     pub max: f32,
+    /// A bound on the depth of the pixels that show a surface (nearer than the far plane);
+    /// None where every pixel shows the clear.
+    pub surface: Option<f32>,
+}
+
+/// The larger of two depths (never NaN), in the form that compiles to one vector instruction
+/// (`f32::max` also orders NaN).
+fn max(a: f32, b: f32) -> f32 {
+    if a > b { a } else { b }
+}
+
+/// The maximum of each 2×2 block of a `width`×`height` image (the last column and row
+/// repeated where the size is odd), one row pair at a time so the loop runs over slices.
+fn reduce_2x2(image: &[f32], width: usize, height: usize) -> Vec<f32> {
+    let (w, h) = (width.div_ceil(2), height.div_ceil(2));
+    let mut out = Vec::with_capacity(w * h);
+    for y in 0..h {
+        let r0 = &image[2 * y * width..][..width];
+        let r1 = &image[(2 * y + 1).min(height - 1) * width..][..width];
+        let pairs = r0.chunks_exact(2).zip(r1.chunks_exact(2));
+        out.extend(pairs.map(|(a, b)| max(max(a[0], a[1]), max(b[0], b[1]))));
+        if width % 2 == 1 {
+            out.push(max(r0[width - 1], r1[width - 1]));
+        }
+    }
+    out
 }
 
 impl DepthPyramid {
     /// From `depth` (`width`×`height` values, top row first, as `read_pixels` gives them).
     /// None when the sizes disagree.
     pub fn from_top_down(depth: &[f32], width: usize, height: usize) -> Option<DepthPyramid> {
+        if width == 0 || depth.len() != width * height {
+            return None;
+        }
+        let bottom_up = depth.chunks_exact(width).rev().flatten().copied().collect();
+        DepthPyramid::from_bottom_up(bottom_up, width, height)
+    }
+
+    /// From `depth` in window coordinates' row order (bottom row first, as GL reads them).
+    /// None when the sizes disagree.
+    pub fn from_bottom_up(depth: Vec<f32>, width: usize, height: usize) -> Option<DepthPyramid> {
         if width == 0 || height == 0 || depth.len() != width * height {
             return None;
         }
-        let mut base = Vec::with_capacity(depth.len());
-        for row in depth.chunks_exact(width).rev() {
-            base.extend_from_slice(row);
-        }
+        let max = depth;
+        let surface = max
+            .iter()
+            .map(|&d| if d < 1.0 { d } else { NO_SURFACE })
+            .collect();
         let mut levels = vec![Level {
             width,
             height,
-            max: base,
+            max,
+            surface,
         }];
         while let Some(l) = levels.last().filter(|l| l.width > 1 || l.height > 1) {
-            let (w, h) = (l.width.div_ceil(2), l.height.div_ceil(2));
-            let mut max = Vec::with_capacity(w * h);
-            for y in 0..h {
-                for x in 0..w {
-                    let (x0, y0) = (2 * x, 2 * y);
-                    let (x1, y1) = ((x0 + 1).min(l.width - 1), (y0 + 1).min(l.height - 1));
-                    max.push(
-                        l.at(x0, y0)
-                            .max(l.at(x1, y0))
-                            .max(l.at(x0, y1))
-                            .max(l.at(x1, y1)),
-                    );
-                }
-            }
-            levels.push(Level {
-                width: w,
-                height: h,
-                max,
-            });
+            let next = Level {
+                width: l.width.div_ceil(2),
+                height: l.height.div_ceil(2),
+                max: reduce_2x2(&l.max, l.width, l.height),
+                surface: reduce_2x2(&l.surface, l.width, l.height),
+            };
+            levels.push(next);
         }
         Some(DepthPyramid { levels })
     }
@@ -133,6 +165,7 @@ impl DepthPyramid {
                     x: ((tx << k).max(x0), ((tx + 1) << k).min(x1 + 1) - 1),
                     y: ((ty << k).max(y0), ((ty + 1) << k).min(y1 + 1) - 1),
                     max: l.at(tx, ty),
+                    surface: Some(l.surface[ty * l.width + tx]).filter(|&d| d != NO_SURFACE),
                 });
             }
         }
@@ -290,5 +323,82 @@ mod tests {
         assert_eq!(p.farthest(&rect(50, 0, 10, 10)), None);
         assert_eq!(p.farthest(&rect(-20, 0, 10, 10)), None);
         assert_eq!(p.farthest(&rect(3, 3, 0, 5)), None);
+    }
+
+    #[test]
+    fn block_surface_depths_bound_the_surface_pixels_and_skip_the_far_plane() {
+        let (w, h) = (53usize, 37usize);
+        // Window rows bottom-up; every seventh pixel and a whole corner at the far plane.
+        let bottom_up: Vec<f32> = (0..w * h)
+            .map(|i| {
+                let (x, y) = (i % w, i / w);
+                if i % 7 == 0 || (x > 40 && y > 25) {
+                    1.0
+                } else {
+                    ((i * 7919) % 1009) as f32 / 1010.0
+                }
+            })
+            .collect();
+        let p = DepthPyramid::from_bottom_up(bottom_up.clone(), w, h).unwrap();
+        let (mut with, mut without) = (0, 0);
+        for (r, span) in [
+            (
+                Scissor {
+                    x: 0,
+                    y: 0,
+                    width: 53,
+                    height: 37,
+                },
+                4,
+            ),
+            (
+                Scissor {
+                    x: 38,
+                    y: 20,
+                    width: 15,
+                    height: 17,
+                },
+                16,
+            ),
+            (
+                Scissor {
+                    x: 3,
+                    y: 5,
+                    width: 9,
+                    height: 6,
+                },
+                16,
+            ),
+            (
+                Scissor {
+                    x: 42,
+                    y: 27,
+                    width: 11,
+                    height: 10,
+                },
+                2,
+            ),
+        ] {
+            for b in p.blocks(&r, span) {
+                let surface = (b.y.0..=b.y.1)
+                    .flat_map(|y| (b.x.0..=b.x.1).map(move |x| (x, y)))
+                    .map(|(x, y)| bottom_up[y * w + x])
+                    .filter(|&d| d < 1.0)
+                    .reduce(f32::max);
+                match (b.surface, surface) {
+                    (Some(bound), Some(truth)) => {
+                        assert!(bound >= truth && bound < 1.0, "{bound} < {truth}");
+                        with += 1;
+                    }
+                    // A coarse texel may take in surface pixels just outside the block.
+                    (Some(bound), None) => assert!(bound < 1.0),
+                    (None, truth) => {
+                        assert_eq!(truth, None);
+                        without += 1;
+                    }
+                }
+            }
+        }
+        assert!(with > 10 && without > 0, "{with} {without}");
     }
 }
