@@ -607,6 +607,11 @@ define_options! {
         /// quarters and ninths, each lifted above every pixel; the draw keeps what lies under
         /// all of them (see `plan::depth_bounds`).
         depth_clip_planes: u32 = 4, in 1 ..= 4;
+        /// Draw neighbouring shadow-volume chunks of one caster (the halves of the cuts
+        /// `cull_casters` culls by) as one piece where a light keeps both with the same
+        /// counting and their rectangles overlap: the sides each chunk extrudes along the
+        /// cut, which cancel, are not rasterised (see `plan::merge`).
+        merge_pieces: bool = true;
         /// Under `shadow_volume.counting = zfail`, count depth-pass, without caps, each caster
         /// piece whose shadow cannot hold the camera (Doom 3's test) and that is not
         /// alpha-tested, depth-fail the others (as `counting = auto`; `zpass` stays `zpass`).

@@ -685,6 +685,7 @@ impl Renderer {
                 0
             },
             scissor: options.plan.enabled && options.plan.piece_scissor,
+            merge: options.plan.enabled && options.plan.merge_pieces,
             truncate: options.plan.enabled && options.plan.truncate_volumes,
         };
         for lp in plan

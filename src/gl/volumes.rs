@@ -4,9 +4,11 @@
 
 use crate::options::ShadowVolumeOptions;
 use crate::plan::depth_bounds::{DepthBound, MAX_PLANES};
+use crate::plan::merge::{KeptChunk, merged_spans};
 use crate::plan::occlusion::DepthPyramid;
 use crate::plan::scissor::{Scissor, points_scissor};
-use crate::plan::{CameraSetup, LightPlan, VolumePart};
+use crate::plan::{CameraSetup, LightPlan};
+use crate::scene::Aabb;
 use crate::scene::Scene;
 use crate::shadow::volume::{self, Counting, VolumeSettings};
 use glam::Mat4;
@@ -49,15 +51,30 @@ pub struct VolumeStats {
     /// Mean share of the screen a drawn part's stencil draw is scissored to (1 without
     /// `plan.piece_scissor`).
     pub part_scissor_fraction: f64,
+    /// Planned chunks drawn inside a merged piece (`plan.merge_pieces`), and the merged pieces
+    /// they make up.
+    pub chunks_merged: usize,
+    pub merged_parts: usize,
     /// Parts built this frame, and parts reused from earlier frames.
     pub parts_built: usize,
     pub parts_reused: usize,
 }
 
+/// Which triangles of a caster group one drawn piece holds.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum PieceId {
+    /// A whole connected component (the paper's frame, without `plan.cull_casters`).
+    Component(usize),
+    /// The chunks `first..end`: one chunk, or neighbours merged (`plan.merge_pieces`).
+    Chunks(usize, usize),
+}
+
 /// One part's vertex ranges in the light's buffer.
 #[derive(Debug, Clone, Copy)]
 pub struct PartRange {
-    pub part: VolumePart,
+    pub group: usize,
+    pub piece: PieceId,
+    pub counting: Counting,
     pub model: Mat4,
     pub first: i32,
     pub sides: i32,
@@ -113,8 +130,8 @@ pub struct LightVolumes {
     /// The stencil pass's draw calls over `parts`.
     pub draws: Vec<VolumeDraw>,
     pub stats: VolumeStats,
-    /// Each part's last geometry, by (group, piece, chunked), with what it was built from.
-    meshes: HashMap<(usize, usize, bool), CachedPart>,
+    /// Each part's last geometry, by group and piece, with what it was built from.
+    meshes: HashMap<(usize, PieceId), CachedPart>,
     /// What the buffer holds: a hash of the written parts' keys in order and their length.
     uploaded: u64,
     /// Vertices in the buffer: no draw may reach past them (llvmpipe reads out of bounds
@@ -143,6 +160,8 @@ pub struct PieceChoices<'a> {
     /// `plan.depth_clip`: each depth-pass part is clipped behind the depth buffer within its
     /// rectangle by up to this many planes (`plan.depth_clip_planes`; 0: not clipped).
     pub depth_clip: usize,
+    /// `plan.merge_pieces`: neighbouring chunks kept alike are drawn as one piece.
+    pub merge: bool,
 }
 
 #[derive(Default)]
@@ -164,7 +183,7 @@ fn settings(o: &ShadowVolumeOptions) -> VolumeSettings {
 fn part_key(
     light: glam::Vec3,
     o: &ShadowVolumeOptions,
-    p: &VolumePart,
+    p: &Piece,
     model: &Mat4,
     receivers: u64,
 ) -> u64 {
@@ -177,8 +196,7 @@ fn part_key(
         o.finite_distance.to_bits(),
         o.facing_epsilon.to_bits(),
         p.group,
-        p.component,
-        p.chunked,
+        p.id,
         p.counting as u8,
     )
         .hash(&mut h);
@@ -194,7 +212,7 @@ fn draws_of(parts: &[PartRange]) -> Vec<VolumeDraw> {
         let count = p.sides + p.caps;
         match draws.last_mut() {
             Some(d)
-                if d.counting == p.part.counting
+                if d.counting == p.counting
                     && d.model == p.model
                     && d.scissor == p.scissor
                     && d.depth_clip == p.depth_clip
@@ -203,7 +221,7 @@ fn draws_of(parts: &[PartRange]) -> Vec<VolumeDraw> {
                 d.count += count;
             }
             _ => draws.push(VolumeDraw {
-                counting: p.part.counting,
+                counting: p.counting,
                 model: p.model,
                 first: p.first,
                 count,
@@ -213,6 +231,95 @@ fn draws_of(parts: &[PartRange]) -> Vec<VolumeDraw> {
         }
     }
     draws
+}
+
+/// One piece a light's stencil pass draws: a planned part, or planned chunks merged.
+struct Piece {
+    group: usize,
+    id: PieceId,
+    counting: Counting,
+    /// The group's transform, and the light and its range in the group's space.
+    model: Mat4,
+    light_local: glam::Vec3,
+    local_radius: f32,
+    /// The receiver boxes (in the group's space) its shadow can reach.
+    near: Vec<Aabb>,
+    /// Where its draw may change counts (`plan.piece_scissor`; None: the light's rectangle).
+    rect: Option<Scissor>,
+}
+
+/// `planned` with the spans of chunks `plan::merge` picks drawn as one piece each (their
+/// receivers and rectangles together); the other parts as they were. `whole` stands for the
+/// rectangle of a part without one.
+fn merge(
+    planned: Vec<Piece>,
+    groups: &volume::CasterGroups,
+    whole: Scissor,
+    stats: &mut VolumeStats,
+) -> Vec<Piece> {
+    let by_chunk: HashMap<(usize, usize), usize> = planned
+        .iter()
+        .enumerate()
+        .filter_map(|(i, p)| match p.id {
+            PieceId::Chunks(c, _) => Some(((p.group, c), i)),
+            PieceId::Component(_) => None,
+        })
+        .collect();
+    let mut group_ids: Vec<usize> = by_chunk.keys().map(|&(g, _)| g).collect();
+    group_ids.sort_unstable();
+    group_ids.dedup();
+    let mut taken = vec![false; planned.len()];
+    let mut out = Vec::new();
+    for g in group_ids {
+        let spans = merged_spans(&groups.groups[g].chunk_tree, |c| {
+            let p = &planned[*by_chunk.get(&(g, c))?];
+            let rect = p.rect.unwrap_or(whole);
+            (rect.area() > 0).then_some(KeptChunk {
+                counting: p.counting,
+                rect,
+            })
+        });
+        for (first, end) in spans {
+            let members: Vec<&Piece> = (first..end)
+                .map(|c| {
+                    let i = by_chunk[&(g, c)];
+                    taken[i] = true;
+                    &planned[i]
+                })
+                .collect();
+            let mut near: Vec<Aabb> = Vec::new();
+            for b in members.iter().flat_map(|m| &m.near) {
+                if !near.contains(b) {
+                    near.push(*b);
+                }
+            }
+            let rect = members
+                .iter()
+                .filter_map(|m| m.rect)
+                .reduce(|a, b| a.union(&b));
+            stats.chunks_merged += members.len();
+            stats.merged_parts += 1;
+            let m = members[0];
+            out.push(Piece {
+                group: g,
+                id: PieceId::Chunks(first, end),
+                counting: m.counting,
+                model: m.model,
+                light_local: m.light_local,
+                local_radius: m.local_radius,
+                near,
+                rect,
+            });
+        }
+    }
+    out.extend(
+        planned
+            .into_iter()
+            .zip(taken)
+            .filter(|(_, t)| !t)
+            .map(|(p, _)| p),
+    );
+    out
 }
 
 impl VolumeCache {
@@ -267,19 +374,21 @@ impl VolumeCache {
         };
         let radius = scene.lights[lp.light].radius;
         // The receivers' boxes in each caster group's space.
-        let mut local_boxes: HashMap<usize, Vec<crate::scene::Aabb>> = HashMap::new();
-        let mut keys = Vec::with_capacity(lp.volumes.len());
-        let mut models = Vec::with_capacity(lp.volumes.len());
-        let mut rects = Vec::with_capacity(lp.volumes.len());
+        let mut local_boxes: HashMap<usize, Vec<Aabb>> = HashMap::new();
+        let mut planned: Vec<Piece> = Vec::with_capacity(lp.volumes.len());
         for p in &lp.volumes {
             let group = &groups.groups[p.group];
             let model = volume::group_transform(scene, group.owner);
             let to_local = model.inverse();
             let light_local = to_local.transform_point3(light_world);
-            let piece = if p.chunked {
-                &group.chunks[p.component]
+            let (id, piece) = if p.chunked {
+                let id = PieceId::Chunks(p.component, p.component + 1);
+                (id, &group.chunks[p.component])
             } else {
-                &group.components[p.component]
+                (
+                    PieceId::Component(p.component),
+                    &group.components[p.component],
+                )
             };
             let boxes = local_boxes
                 .entry(p.group)
@@ -293,29 +402,15 @@ impl VolumeCache {
             // The part depends only on the receivers its shadow can reach: a moving receiver
             // rebuilds the parts that shadow it, not the light's whole volume.
             let piece_shadow = volume::shadow_bounds(&piece.bounds, light_local, local_radius);
-            let near: Vec<crate::scene::Aabb> = boxes
+            let near: Vec<Aabb> = boxes
                 .iter()
                 .filter(|b| b.intersects(&piece_shadow))
                 .copied()
                 .collect();
-            let receivers_key = {
-                let mut h = std::collections::hash_map::DefaultHasher::new();
-                culling.hash(&mut h);
-                pieces.truncate.hash(&mut h);
-                local_radius.to_bits().hash(&mut h);
-                for b in &near {
-                    (
-                        b.min.to_array().map(f32::to_bits),
-                        b.max.to_array().map(f32::to_bits),
-                    )
-                        .hash(&mut h);
-                }
-                h.finish()
-            };
             // A piece's volume is closed, so its counts cancel wherever the visible surface is
             // outside it: only receiver points in its shadow (within the range, inside
             // `piece_shadow`) can see a change. Their boxes, cut to that shadow, bound it.
-            rects.push(if pieces.scissor && culling {
+            let rect = if pieces.scissor && culling {
                 let light_rect = lp.scissor.unwrap_or_else(|| Scissor::full(camera));
                 let mut rect: Option<Scissor> = None;
                 for b in &near {
@@ -328,26 +423,68 @@ impl VolumeCache {
                 Some(rect.map_or(Scissor::EMPTY, |r| r.intersect(&light_rect)))
             } else {
                 None
+            };
+            planned.push(Piece {
+                group: p.group,
+                id,
+                counting: p.counting,
+                model,
+                light_local,
+                local_radius,
+                near,
+                rect,
             });
-            let key = part_key(light_world, o, p, &model, receivers_key);
+        }
+        let drawn_pieces = if pieces.merge {
+            let whole = lp.scissor.unwrap_or_else(|| Scissor::full(camera));
+            merge(planned, &groups, whole, &mut stats)
+        } else {
+            planned
+        };
+        let mut keys = Vec::with_capacity(drawn_pieces.len());
+        for p in &drawn_pieces {
+            let group = &groups.groups[p.group];
+            let receivers_key = {
+                let mut h = std::collections::hash_map::DefaultHasher::new();
+                culling.hash(&mut h);
+                pieces.truncate.hash(&mut h);
+                p.local_radius.to_bits().hash(&mut h);
+                for b in &p.near {
+                    (
+                        b.min.to_array().map(f32::to_bits),
+                        b.max.to_array().map(f32::to_bits),
+                    )
+                        .hash(&mut h);
+                }
+                h.finish()
+            };
+            let key = part_key(light_world, o, p, &p.model, receivers_key);
             let cached = lv
                 .meshes
-                .get(&(p.group, p.component, p.chunked))
+                .get(&(p.group, p.id))
                 .is_some_and(|c| o.caching && c.key == key);
             if cached {
                 stats.parts_reused += 1;
             } else {
+                use std::borrow::Cow;
+                let piece: Cow<volume::Component> = match p.id {
+                    PieceId::Component(i) => Cow::Borrowed(&group.components[i]),
+                    PieceId::Chunks(first, end) if end == first + 1 => {
+                        Cow::Borrowed(&group.chunks[first])
+                    }
+                    PieceId::Chunks(first, end) => Cow::Owned(group.chunk_span(first, end)),
+                };
                 let with_caps = p.counting == Counting::ZFail;
                 let cull = culling.then_some(volume::ReceiverCull {
-                    boxes: &near,
-                    radius: local_radius,
+                    boxes: &p.near,
+                    radius: p.local_radius,
                     // An explicit finite extrusion (the paper's option) is the user's to see.
                     truncate: pieces.truncate && o.extrusion == volume::Extrusion::Infinite,
                 });
                 let mesh = volume::build_volume_of(
                     group,
-                    piece,
-                    light_local.as_dvec3(),
+                    &piece,
+                    p.light_local.as_dvec3(),
                     &s,
                     with_caps,
                     cull,
@@ -355,59 +492,51 @@ impl VolumeCache {
                 stats.triangles_culled += mesh.culled;
                 stats.triangles_tested += piece.triangles.len();
                 stats.parts_built += 1;
-                lv.meshes
-                    .insert((p.group, p.component, p.chunked), CachedPart { key, mesh });
+                lv.meshes.insert((p.group, p.id), CachedPart { key, mesh });
             }
             match p.counting {
                 Counting::ZFail => stats.zfail_parts += 1,
                 Counting::ZPass => stats.zpass_parts += 1,
             }
             keys.push(key);
-            models.push(model);
         }
-        // Parts no longer planned are dropped: the cache holds this frame's parts only.
-        let wanted: std::collections::HashSet<(usize, usize, bool)> = lp
-            .volumes
-            .iter()
-            .map(|p| (p.group, p.component, p.chunked))
-            .collect();
+        // Parts no longer drawn are dropped: the cache holds this frame's parts only.
+        let wanted: std::collections::HashSet<(usize, PieceId)> =
+            drawn_pieces.iter().map(|p| (p.group, p.id)).collect();
         lv.meshes.retain(|k, _| wanted.contains(k));
-        let mut parts = Vec::with_capacity(lp.volumes.len());
+        let mut parts = Vec::with_capacity(drawn_pieces.len());
         let mut vertices: Vec<[f32; 4]> = Vec::new();
         let mut scissored = 0.0;
         // Depth-fail parts first, each group's together, so that runs of parts can share a
         // draw call (a depth-pass part has no caps: its sides are all it draws).
-        let mut order: Vec<_> = lp
-            .volumes
-            .iter()
-            .zip(keys)
-            .zip(models.into_iter().zip(rects))
-            .collect();
-        order.sort_by_key(|((p, _), _)| (p.counting != Counting::ZFail, p.group));
+        let mut order: Vec<_> = drawn_pieces.iter().zip(keys).collect();
+        order.sort_by_key(|(p, _)| (p.counting != Counting::ZFail, p.group));
         // The buffer holds every planned part in this order, so that its layout follows the
         // part keys alone; a part off screen is skipped when drawing, not when uploading (as
         // the camera turns, parts leave and enter the screen with nothing rebuilt).
         let mut layout = std::collections::hash_map::DefaultHasher::new();
         let mut drawn = 0usize;
-        for ((p, key), (model, scissor)) in order {
-            let mesh = &lv.meshes[&(p.group, p.component, p.chunked)].mesh;
+        for (p, key) in order {
+            let mesh = &lv.meshes[&(p.group, p.id)].mesh;
             if mesh.vertices.is_empty() {
                 continue;
             }
             let range = PartRange {
-                part: *p,
-                model,
+                group: p.group,
+                piece: p.id,
+                counting: p.counting,
+                model: p.model,
                 first: vertices.len() as i32,
                 sides: mesh.side_vertices as i32,
                 caps: mesh.cap_vertices as i32,
-                scissor,
+                scissor: p.rect,
                 depth_clip: match pieces.depth.filter(|_| pieces.depth_clip > 0) {
                     Some(depth) => {
                         let full = Scissor::full(camera);
                         depth_clip(
                             depth,
                             camera,
-                            &scissor.or(lp.scissor).unwrap_or(full),
+                            &p.rect.or(lp.scissor).unwrap_or(full),
                             p.counting,
                             pieces.depth_clip,
                         )
@@ -429,7 +558,7 @@ impl VolumeCache {
             if range.depth_clip != [[0.0; 4]; MAX_PLANES] {
                 stats.parts_depth_clipped += 1;
             }
-            scissored += scissor.map_or(1.0, |s| {
+            scissored += p.rect.map_or(1.0, |s| {
                 s.area() as f64 / Scissor::full(camera).area().max(1) as f64
             });
             stats.quads += mesh.quads;

@@ -6,6 +6,7 @@ pub mod auto;
 pub mod cull;
 pub mod depth_bounds;
 pub mod frustum;
+pub mod merge;
 pub mod occlusion;
 pub mod scissor;
 

@@ -48,6 +48,20 @@ pub struct CasterGroup {
     /// space. A piece's volume is closed on its own (its cut edges are extruded like open
     /// edges), so the planner can cull pieces of a large connected world one by one.
     pub chunks: Vec<Component>,
+    /// How the components were cut into `chunks`, children before parents: a component of
+    /// more than one chunk has a node for each cut.
+    pub chunk_tree: Vec<ChunkNode>,
+}
+
+/// One cut of [`split_chunks`]: the chunks `first..end` (consecutive: each half's chunks follow
+/// one another) are the halves `first..mid` and `mid..end` of one piece of a component. Two
+/// neighbouring halves share the edges along the cut, where each half's volume has a side the
+/// other's cancels; drawn as one piece, those sides go away.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct ChunkNode {
+    pub first: usize,
+    pub mid: usize,
+    pub end: usize,
 }
 
 /// The part of space where a caster inside `caster` can shadow receivers within `radius` of the
@@ -170,8 +184,14 @@ fn furthest_corner(b: &Aabb, n: DVec3) -> DVec3 {
 /// Largest piece of [`CasterGroup::chunks`].
 pub const CHUNK_TRIANGLES: usize = 256;
 
-/// Splits `tris` at the median centroid along the longest axis until pieces are small enough.
-fn split_chunks(c: &Connectivity, tris: Vec<u32>, out: &mut Vec<Vec<u32>>) {
+/// Splits `tris` at the median centroid along the longest axis until pieces are small enough,
+/// recording each cut in `tree`.
+fn split_chunks(
+    c: &Connectivity,
+    tris: Vec<u32>,
+    out: &mut Vec<Vec<u32>>,
+    tree: &mut Vec<ChunkNode>,
+) {
     if tris.len() <= CHUNK_TRIANGLES {
         out.push(tris);
         return;
@@ -192,8 +212,15 @@ fn split_chunks(c: &Connectivity, tris: Vec<u32>, out: &mut Vec<Vec<u32>>) {
     let mut tris = tris;
     tris.sort_by(|&a, &b| centroid(a)[axis].total_cmp(&centroid(b)[axis]));
     let right = tris.split_off(tris.len() / 2);
-    split_chunks(c, tris, out);
-    split_chunks(c, right, out);
+    let first = out.len();
+    split_chunks(c, tris, out, tree);
+    let mid = out.len();
+    split_chunks(c, right, out, tree);
+    tree.push(ChunkNode {
+        first,
+        mid,
+        end: out.len(),
+    });
 }
 
 /// Every caster group of a scene, built once per scene.
@@ -251,9 +278,14 @@ impl CasterGroup {
             let c = tri_component[connectivity.triangles_of(e)[0] as usize];
             components[c as usize].edges.push(ei as u32);
         }
-        let mut pieces = Vec::new();
+        let (mut pieces, mut chunk_tree) = (Vec::new(), Vec::new());
         for comp in &components {
-            split_chunks(&connectivity, comp.triangles.clone(), &mut pieces);
+            split_chunks(
+                &connectivity,
+                comp.triangles.clone(),
+                &mut pieces,
+                &mut chunk_tree,
+            );
         }
         let mut tri_chunk = vec![0u32; n];
         let mut chunks: Vec<Component> = pieces
@@ -290,6 +322,24 @@ impl CasterGroup {
             connectivity,
             components,
             chunks,
+            chunk_tree,
+        }
+    }
+
+    /// The chunks `first..end` as one piece: their triangles, their edges (once each) and
+    /// bounds. Its volume is theirs less the sides along the cuts between them.
+    pub fn chunk_span(&self, first: usize, end: usize) -> Component {
+        let span = &self.chunks[first..end];
+        let mut edges: Vec<u32> = span.iter().flat_map(|c| c.edges.iter().copied()).collect();
+        edges.sort_unstable();
+        edges.dedup();
+        Component {
+            triangles: span
+                .iter()
+                .flat_map(|c| c.triangles.iter().copied())
+                .collect(),
+            edges,
+            bounds: span.iter().fold(Aabb::EMPTY, |b, c| b.union(&c.bounds)),
         }
     }
 }

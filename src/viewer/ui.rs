@@ -515,9 +515,12 @@ fn timings(ui: &mut egui::Ui, state: &ViewerState, frame: &Frame) {
         let zpass: usize = frame.volumes.iter().map(|v| v.zpass_parts).sum();
         let zfail: usize = frame.volumes.iter().map(|v| v.zfail_parts).sum();
         let clipped: usize = frame.volumes.iter().map(|v| v.parts_depth_clipped).sum();
+        let merged: usize = frame.volumes.iter().map(|v| v.merged_parts).sum();
+        let chunks: usize = frame.volumes.iter().map(|v| v.chunks_merged).sum();
         ui.label(format!(
             "volumes: {quads} quads, {caps} cap triangles, {zfail} z-fail / {zpass} z-pass parts \
-             ({clipped} depth-clipped), {} stencil pass(es)",
+             ({clipped} depth-clipped, {merged} merged from {chunks} chunks), {} stencil \
+             pass(es)",
             p.stencil_passes
         ));
     }

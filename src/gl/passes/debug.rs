@@ -39,7 +39,7 @@ pub fn volumes(
             program.set_mat4(gl, "u_model", &p.model);
             program.set_i32(gl, "u_first", p.first);
             if geometry {
-                let (colour, count) = match p.part.counting {
+                let (colour, count) = match p.counting {
                     Counting::ZFail => (ZFAIL, p.sides + p.caps),
                     Counting::ZPass => (ZPASS, p.sides),
                 };
