@@ -688,6 +688,8 @@ impl Renderer {
             merge: options.plan.enabled && options.plan.merge_pieces,
             truncate: options.plan.enabled && options.plan.truncate_volumes,
         };
+        let prepare_start = Instant::now();
+        let mut builds_ms = 0.0;
         for lp in plan
             .lights
             .iter()
@@ -704,9 +706,16 @@ impl Renderer {
             };
             self.timer
                 .record_cpu(format!("light{}.volume_build", lp.light), build_ms);
+            builds_ms += build_ms;
             cache.volume_parts_built += v.stats.parts_built;
             cache.volume_parts_reused += v.stats.parts_reused;
             volume_stats.push(v.stats);
+        }
+        if any_volumes {
+            // The per-frame decisions on the pieces (receivers, rectangles, merges, depth
+            // clips) and the uploads, less the builds timed above.
+            let ms = prepare_start.elapsed().as_secs_f64() * 1e3 - builds_ms;
+            self.timer.record_cpu("volume_pieces", ms.max(0.0));
         }
 
         let mut stencil_image = None;

@@ -242,8 +242,9 @@ struct Piece {
     model: Mat4,
     light_local: glam::Vec3,
     local_radius: f32,
-    /// The receiver boxes (in the group's space) its shadow can reach.
-    near: Vec<Aabb>,
+    /// The receiver boxes its shadow can reach: indices into the group's `local_boxes`, in
+    /// order.
+    near: Vec<u32>,
     /// Where its draw may change counts (`plan.piece_scissor`; None: the light's rectangle).
     rect: Option<Scissor>,
 }
@@ -287,12 +288,12 @@ fn merge(
                     &planned[i]
                 })
                 .collect();
-            let mut near: Vec<Aabb> = Vec::new();
-            for b in members.iter().flat_map(|m| &m.near) {
-                if !near.contains(b) {
-                    near.push(*b);
-                }
-            }
+            let mut near: Vec<u32> = members
+                .iter()
+                .flat_map(|m| m.near.iter().copied())
+                .collect();
+            near.sort_unstable();
+            near.dedup();
             let rect = members
                 .iter()
                 .filter_map(|m| m.rect)
@@ -373,8 +374,8 @@ impl VolumeCache {
             ..VolumeStats::default()
         };
         let radius = scene.lights[lp.light].radius;
-        // The receivers' boxes in each caster group's space.
-        let mut local_boxes: HashMap<usize, Vec<Aabb>> = HashMap::new();
+        // The receivers' boxes in each caster group's space, and a hash of each.
+        let mut local_boxes: HashMap<usize, (Vec<Aabb>, Vec<u64>)> = HashMap::new();
         let mut planned: Vec<Piece> = Vec::with_capacity(lp.volumes.len());
         for p in &lp.volumes {
             let group = &groups.groups[p.group];
@@ -390,9 +391,20 @@ impl VolumeCache {
                     &group.components[p.component],
                 )
             };
-            let boxes = local_boxes
-                .entry(p.group)
-                .or_insert_with(|| receivers.iter().map(|b| b.transformed(&to_local)).collect());
+            let (boxes, _) = local_boxes.entry(p.group).or_insert_with(|| {
+                let boxes: Vec<Aabb> = receivers.iter().map(|b| b.transformed(&to_local)).collect();
+                let hashes = boxes
+                    .iter()
+                    .map(|b| {
+                        let mut h = std::collections::hash_map::DefaultHasher::new();
+                        [b.min.to_array(), b.max.to_array()]
+                            .map(|a| a.map(f32::to_bits))
+                            .hash(&mut h);
+                        h.finish()
+                    })
+                    .collect();
+                (boxes, hashes)
+            });
             // The range in the group's space (a scaled model stretches it).
             let stretch = [to_local.x_axis, to_local.y_axis, to_local.z_axis]
                 .iter()
@@ -402,10 +414,8 @@ impl VolumeCache {
             // The part depends only on the receivers its shadow can reach: a moving receiver
             // rebuilds the parts that shadow it, not the light's whole volume.
             let piece_shadow = volume::shadow_bounds(&piece.bounds, light_local, local_radius);
-            let near: Vec<Aabb> = boxes
-                .iter()
-                .filter(|b| b.intersects(&piece_shadow))
-                .copied()
+            let near: Vec<u32> = (0..boxes.len() as u32)
+                .filter(|&i| boxes[i as usize].intersects(&piece_shadow))
                 .collect();
             // A piece's volume is closed, so its counts cancel wherever the visible surface is
             // outside it: only receiver points in its shadow (within the range, inside
@@ -413,8 +423,8 @@ impl VolumeCache {
             let rect = if pieces.scissor && culling {
                 let light_rect = lp.scissor.unwrap_or_else(|| Scissor::full(camera));
                 let mut rect: Option<Scissor> = None;
-                for b in &near {
-                    let cut = b.intersection(&piece_shadow);
+                for &i in &near {
+                    let cut = boxes[i as usize].intersection(&piece_shadow);
                     let corners = cut.corners().map(|c| model.transform_point3(c));
                     if let Some(r) = points_scissor(camera, &corners).filter(|r| r.area() > 0) {
                         rect = Some(rect.map_or(r, |u| u.union(&r)));
@@ -444,18 +454,14 @@ impl VolumeCache {
         let mut keys = Vec::with_capacity(drawn_pieces.len());
         for p in &drawn_pieces {
             let group = &groups.groups[p.group];
+            let (boxes, box_hashes) = &local_boxes[&p.group];
             let receivers_key = {
                 let mut h = std::collections::hash_map::DefaultHasher::new();
                 culling.hash(&mut h);
                 pieces.truncate.hash(&mut h);
                 p.local_radius.to_bits().hash(&mut h);
-                for b in &p.near {
-                    (
-                        b.min.to_array().map(f32::to_bits),
-                        b.max.to_array().map(f32::to_bits),
-                    )
-                        .hash(&mut h);
-                }
+                let near: Vec<u64> = p.near.iter().map(|&i| box_hashes[i as usize]).collect();
+                near.hash(&mut h);
                 h.finish()
             };
             let key = part_key(light_world, o, p, &p.model, receivers_key);
@@ -475,8 +481,9 @@ impl VolumeCache {
                     PieceId::Chunks(first, end) => Cow::Owned(group.chunk_span(first, end)),
                 };
                 let with_caps = p.counting == Counting::ZFail;
+                let near: Vec<Aabb> = p.near.iter().map(|&i| boxes[i as usize]).collect();
                 let cull = culling.then_some(volume::ReceiverCull {
-                    boxes: &p.near,
+                    boxes: &near,
                     radius: p.local_radius,
                     // An explicit finite extrusion (the paper's option) is the user's to see.
                     truncate: pieces.truncate && o.extrusion == volume::Extrusion::Infinite,
@@ -505,7 +512,8 @@ impl VolumeCache {
             drawn_pieces.iter().map(|p| (p.group, p.id)).collect();
         lv.meshes.retain(|k, _| wanted.contains(k));
         let mut parts = Vec::with_capacity(drawn_pieces.len());
-        let mut vertices: Vec<[f32; 4]> = Vec::new();
+        // Vertices the buffer holds before each part.
+        let mut total = 0usize;
         let mut scissored = 0.0;
         // Depth-fail parts first, each group's together, so that runs of parts can share a
         // draw call (a depth-pass part has no caps: its sides are all it draws).
@@ -526,7 +534,7 @@ impl VolumeCache {
                 piece: p.id,
                 counting: p.counting,
                 model: p.model,
-                first: vertices.len() as i32,
+                first: total as i32,
                 sides: mesh.side_vertices as i32,
                 caps: mesh.cap_vertices as i32,
                 scissor: p.rect,
@@ -545,7 +553,7 @@ impl VolumeCache {
                 },
             };
             key.hash(&mut layout);
-            vertices.extend_from_slice(&mesh.vertices);
+            total += mesh.vertices.len();
             parts.push(range);
             if !range.drawn() {
                 stats.parts_offscreen += 1;
@@ -564,7 +572,7 @@ impl VolumeCache {
             stats.quads += mesh.quads;
             stats.cap_triangles += mesh.cap_vertices / 3;
         }
-        vertices.len().hash(&mut layout);
+        total.hash(&mut layout);
         let contents = layout.finish();
         stats.rebuilt = stats.parts_built > 0;
         stats.part_scissor_fraction = if drawn == 0 {
@@ -573,6 +581,11 @@ impl VolumeCache {
             scissored / drawn as f64
         };
         if contents != lv.uploaded || stats.rebuilt {
+            // Gathered only when the buffer must change: unchanged, the parts' ranges hold.
+            let mut vertices: Vec<[f32; 4]> = Vec::with_capacity(total);
+            for p in &parts {
+                vertices.extend_from_slice(&lv.meshes[&(p.group, p.piece)].mesh.vertices);
+            }
             // SAFETY: uploads plain f32 vertices; attribute 0 is a vec4 position.
             unsafe {
                 gl.bind_vertex_array(Some(lv.vao));
