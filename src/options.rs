@@ -621,6 +621,12 @@ define_options! {
         /// rectangle, not whenever its box, grown by the near distance, holds the light or the
         /// eye or meets the segment between them.
         near_plane_test: bool = true;
+        /// With that test, split a piece it sends to depth-fail: only the facing triangles
+        /// whose shadow may hold part of the near-plane rectangle count depth-fail (with
+        /// caps), the rest of the piece depth-pass, each part closed along the cut. Most of a
+        /// depth-fail piece's fragments lie behind the visible surface, where its entering and
+        /// leaving faces cancel; as depth-pass, the depth clip drops them.
+        split_counting: bool = true;
         /// Count each light's volumes in one pass with glStencilOpSeparate and wrapping
         /// operations (GL 2.0 core), instead of `shadow_volume.stencil`'s two culled passes:
         /// each volume is transformed, clipped and set up once instead of twice. The same

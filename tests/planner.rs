@@ -330,6 +330,31 @@ fn depth_pass_by_the_near_plane_test_changes_at_most_edge_pixels() {
     }
 }
 
+/// A depth-fail piece split by the near-plane test (`plan.split_counting`): its triangles whose
+/// shadow may hold part of the near plane count depth-fail, the rest depth-pass, each part
+/// closed along the cut. Against whole depth-fail pieces only pixels where other polygons cover
+/// a pixel centre may change; along camera paths, with the caches warm. With the signed edge
+/// rule, which closes every volume (under the paper's, open edges leak differently under the
+/// two countings).
+#[test]
+fn split_counting_changes_at_most_edge_pixels() {
+    for name in ["oa_dm1", "q3dm6ish"] {
+        let (scene, _, options) = load_scene_file(name);
+        let whole = with(
+            &options,
+            &[
+                "technique=shadow_volume",
+                "shadow_volume.edge_rule=signed",
+                "plan.split_counting=false",
+            ],
+        );
+        let split = with(&whole, &["plan.split_counting=true"]);
+        changes_at_most_edge_pixels(&scene, &whole, &split, "pieces split", |f| {
+            f.plan_stats.split_parts
+        });
+    }
+}
+
 /// Volumes ending just past their receivers (`plan.truncate_volumes`): the same shadows but for
 /// pixels where the shorter sides, rasterised from other end points, fall differently on a
 /// pixel centre; along camera paths on the three scenes, with the caches warm.

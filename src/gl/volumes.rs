@@ -7,7 +7,7 @@ use crate::plan::depth_bounds::{DepthBound, MAX_PLANES};
 use crate::plan::merge::{KeptChunk, merged_spans};
 use crate::plan::occlusion::DepthPyramid;
 use crate::plan::scissor::{Scissor, points_scissor};
-use crate::plan::{CameraSetup, LightPlan};
+use crate::plan::{CameraSetup, LightPlan, PartTriangles};
 use crate::scene::Aabb;
 use crate::scene::Scene;
 use crate::shadow::volume::{self, Counting, VolumeSettings};
@@ -67,6 +67,13 @@ pub enum PieceId {
     Component(usize),
     /// The chunks `first..end`: one chunk, or neighbours merged (`plan.merge_pieces`).
     Chunks(usize, usize),
+    /// Part of a chunk (`chunked`) or component split by counting (`plan.split_counting`):
+    /// its triangles near the near plane, or the rest.
+    Split {
+        index: usize,
+        chunked: bool,
+        near_plane: bool,
+    },
 }
 
 /// One part's vertex ranges in the light's buffer.
@@ -197,6 +204,7 @@ fn part_key(
         o.facing_epsilon.to_bits(),
         p.group,
         p.id,
+        p.subset_key,
         p.counting as u8,
     )
         .hash(&mut h);
@@ -247,6 +255,9 @@ struct Piece {
     near: Vec<u32>,
     /// Where its draw may change counts (`plan.piece_scissor`; None: the light's rectangle).
     rect: Option<Scissor>,
+    /// A split part's triangles (None: those `id` names), and a hash of them for its key.
+    subset: Option<volume::Component>,
+    subset_key: u64,
 }
 
 /// `planned` with the spans of chunks `plan::merge` picks drawn as one piece each (their
@@ -263,7 +274,7 @@ fn merge(
         .enumerate()
         .filter_map(|(i, p)| match p.id {
             PieceId::Chunks(c, _) => Some(((p.group, c), i)),
-            PieceId::Component(_) => None,
+            PieceId::Component(_) | PieceId::Split { .. } => None,
         })
         .collect();
     let mut group_ids: Vec<usize> = by_chunk.keys().map(|&(g, _)| g).collect();
@@ -310,6 +321,8 @@ fn merge(
                 local_radius: m.local_radius,
                 near,
                 rect,
+                subset: None,
+                subset_key: 0,
             });
         }
     }
@@ -382,15 +395,33 @@ impl VolumeCache {
             let model = volume::group_transform(scene, group.owner);
             let to_local = model.inverse();
             let light_local = to_local.transform_point3(light_world);
-            let (id, piece) = if p.chunked {
-                let id = PieceId::Chunks(p.component, p.component + 1);
-                (id, &group.chunks[p.component])
+            let whole = if p.chunked {
+                &group.chunks[p.component]
             } else {
-                (
-                    PieceId::Component(p.component),
-                    &group.components[p.component],
-                )
+                &group.components[p.component]
             };
+            let (id, subset, subset_key) = match p.triangles {
+                PartTriangles::All if p.chunked => {
+                    (PieceId::Chunks(p.component, p.component + 1), None, 0)
+                }
+                PartTriangles::All => (PieceId::Component(p.component), None, 0),
+                PartTriangles::NearPlane(i) | PartTriangles::Rest(i) => {
+                    let near_plane = matches!(p.triangles, PartTriangles::NearPlane(_));
+                    let mut listed = lp.near_plane_triangles[i].clone();
+                    listed.sort_unstable();
+                    let subset =
+                        group.subset(whole, |t| listed.binary_search(&t).is_ok() == near_plane);
+                    let id = PieceId::Split {
+                        index: p.component,
+                        chunked: p.chunked,
+                        near_plane,
+                    };
+                    let mut h = std::collections::hash_map::DefaultHasher::new();
+                    listed.hash(&mut h);
+                    (id, Some(subset), h.finish())
+                }
+            };
+            let piece = subset.as_ref().unwrap_or(whole);
             let (boxes, _) = local_boxes.entry(p.group).or_insert_with(|| {
                 let boxes: Vec<Aabb> = receivers.iter().map(|b| b.transformed(&to_local)).collect();
                 let hashes = boxes
@@ -443,6 +474,8 @@ impl VolumeCache {
                 local_radius,
                 near,
                 rect,
+                subset,
+                subset_key,
             });
         }
         let drawn_pieces = if pieces.merge {
@@ -473,12 +506,19 @@ impl VolumeCache {
                 stats.parts_reused += 1;
             } else {
                 use std::borrow::Cow;
-                let piece: Cow<volume::Component> = match p.id {
-                    PieceId::Component(i) => Cow::Borrowed(&group.components[i]),
-                    PieceId::Chunks(first, end) if end == first + 1 => {
+                // A split part carries its triangles; the others are named by their id.
+                let piece: Cow<volume::Component> = match (&p.subset, p.id) {
+                    (Some(subset), _) => Cow::Borrowed(subset),
+                    (None, PieceId::Chunks(first, end)) if end == first + 1 => {
                         Cow::Borrowed(&group.chunks[first])
                     }
-                    PieceId::Chunks(first, end) => Cow::Owned(group.chunk_span(first, end)),
+                    (None, PieceId::Chunks(first, end)) => Cow::Owned(group.chunk_span(first, end)),
+                    (None, PieceId::Split { index, chunked, .. }) if chunked => {
+                        Cow::Borrowed(&group.chunks[index])
+                    }
+                    (None, PieceId::Component(i) | PieceId::Split { index: i, .. }) => {
+                        Cow::Borrowed(&group.components[i])
+                    }
                 };
                 let with_caps = p.counting == Counting::ZFail;
                 let near: Vec<Aabb> = p.near.iter().map(|&i| boxes[i as usize]).collect();

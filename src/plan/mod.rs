@@ -87,6 +87,20 @@ pub struct VolumePart {
     /// whole components).
     pub chunked: bool,
     pub counting: Counting,
+    /// Which of the piece's triangles the part holds.
+    pub triangles: PartTriangles,
+}
+
+/// The triangles of a piece one volume part holds (`plan.split_counting`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum PartTriangles {
+    /// The whole piece.
+    All,
+    /// The facing triangles whose shadow may hold part of the near plane:
+    /// `LightPlan::near_plane_triangles[i]`.
+    NearPlane(usize),
+    /// The piece less those.
+    Rest(usize),
 }
 
 /// One light's work this frame.
@@ -121,6 +135,9 @@ pub struct LightPlan {
     /// Shadow volumes: the boxes of the receivers whose counts matter; a facing triangle whose
     /// shadow reaches none of them is left out of its volume (empty: every triangle counts).
     pub volume_receivers: Vec<Aabb>,
+    /// Per split piece (`PartTriangles`), its triangles whose shadow may hold part of the
+    /// near plane, in the piece's order.
+    pub near_plane_triangles: Vec<Vec<u32>>,
     /// How the technique was chosen (`auto`, or why the light needs no shadow work).
     pub reason: String,
 }
@@ -155,6 +172,9 @@ pub struct PlanStats {
     pub scissor_fraction: f64,
     pub zpass_parts: usize,
     pub zfail_parts: usize,
+    /// Pieces split into a depth-fail and a depth-pass part (`plan.split_counting`; each
+    /// counted once more in `zpass_parts` and `zfail_parts`).
+    pub split_parts: usize,
     /// Stencil passes per light's volumes: 2 (the paper's culled passes) or 1
     /// (`plan.one_pass_stencil`, or `shadow_volume.stencil = separate`).
     pub stencil_passes: usize,
@@ -433,6 +453,7 @@ impl Plan {
                 view_scissors: Vec::new(),
                 merged: false,
                 volume_receivers: Vec::new(),
+                near_plane_triangles: Vec::new(),
                 reason: String::new(),
             };
             match technique {
@@ -558,45 +579,82 @@ impl Plan {
                             continue;
                         }
                         stats.casters_drawn += 1;
+                        // Under counting_auto: None when the piece is depth-fail only for
+                        // its triangles near the near plane, which are then split off.
                         let counting = if counting_auto {
                             // A ray seen through an alpha-tested caster's holes enters its
                             // volume through the front cap, which depth-pass does not draw.
-                            let alpha = alpha_caster_bounds.iter().any(|b| b.intersects(&bounds));
-                            let near_shadowed = || {
-                                volume::potentially_inside_shadow(&bounds, eye, pos, near)
-                                    && (!(on && p.near_plane_test) || {
-                                        groups.as_ref().is_none_or(|gs| {
-                                            near_plane_in_shadow(
-                                                scene,
-                                                &gs.groups[group],
-                                                (component, chunked),
-                                                pos,
-                                                &near_quad,
-                                                options.shadow_volume.facing_epsilon,
-                                            )
-                                        })
-                                    })
+                            let alpha = match &groups {
+                                Some(gs) => {
+                                    let g = &gs.groups[group];
+                                    let piece = if chunked {
+                                        &g.chunks[component]
+                                    } else {
+                                        &g.components[component]
+                                    };
+                                    piece.alpha_tested
+                                }
+                                None => alpha_caster_bounds.iter().any(|b| b.intersects(&bounds)),
                             };
-                            if alpha || near_shadowed() {
-                                Counting::ZFail
-                            } else {
-                                Counting::ZPass
+                            let boxed = volume::potentially_inside_shadow(&bounds, eye, pos, near);
+                            let triangle_test = (on && p.near_plane_test)
+                                .then_some(groups.as_ref())
+                                .flatten()
+                                .map(|gs| &gs.groups[group]);
+                            match (alpha, boxed, triangle_test) {
+                                (true, _, _) => Some(Counting::ZFail),
+                                (false, false, _) => Some(Counting::ZPass),
+                                (false, true, None) => Some(Counting::ZFail),
+                                (false, true, Some(g)) => {
+                                    let near_tris = near_plane_triangles(
+                                        scene,
+                                        g,
+                                        (component, chunked),
+                                        pos,
+                                        &near_quad,
+                                        options.shadow_volume.facing_epsilon,
+                                    );
+                                    if near_tris.is_empty() {
+                                        Some(Counting::ZPass)
+                                    } else if p.split_counting {
+                                        plan.near_plane_triangles.push(near_tris);
+                                        None
+                                    } else {
+                                        Some(Counting::ZFail)
+                                    }
+                                }
                             }
                         } else if options.shadow_volume.counting == CountingMode::Zpass {
-                            Counting::ZPass
+                            Some(Counting::ZPass)
                         } else {
-                            Counting::ZFail
+                            Some(Counting::ZFail)
                         };
-                        match counting {
-                            Counting::ZFail => stats.zfail_parts += 1,
-                            Counting::ZPass => stats.zpass_parts += 1,
-                        }
-                        plan.volumes.push(VolumePart {
+                        let part = |counting, triangles| VolumePart {
                             group,
                             component,
                             chunked,
                             counting,
-                        });
+                            triangles,
+                        };
+                        match counting {
+                            Some(counting) => {
+                                match counting {
+                                    Counting::ZFail => stats.zfail_parts += 1,
+                                    Counting::ZPass => stats.zpass_parts += 1,
+                                }
+                                plan.volumes.push(part(counting, PartTriangles::All));
+                            }
+                            None => {
+                                let i = plan.near_plane_triangles.len() - 1;
+                                stats.split_parts += 1;
+                                stats.zfail_parts += 1;
+                                stats.zpass_parts += 1;
+                                plan.volumes
+                                    .push(part(Counting::ZFail, PartTriangles::NearPlane(i)));
+                                plan.volumes
+                                    .push(part(Counting::ZPass, PartTriangles::Rest(i)));
+                            }
+                        }
                     }
                     if on && p.cull_casters {
                         plan.volume_receivers = receiver_boxes;
@@ -656,27 +714,28 @@ pub fn normal_matrix(model: &Mat4) -> Mat3 {
 }
 
 /// `plan.near_plane_test` for one piece (a chunk, or a component when not `chunked`) of caster
-/// group `g`: whether the camera's near-plane rectangle `near_quad` (world space) may lie in
-/// its shadow from a light at `light`, tested in the group's own space.
-fn near_plane_in_shadow(
+/// group `g`: its facing triangles whose shadow from a light at `light` may hold part of the
+/// camera's near-plane rectangle `near_quad` (world space), tested in the group's own space.
+fn near_plane_triangles(
     scene: &Scene,
     g: &volume::CasterGroup,
     (index, chunked): (usize, bool),
     light: Vec3,
     near_quad: &[Vec3; 4],
     facing_epsilon: f32,
-) -> bool {
+) -> Vec<u32> {
     let to_local = volume::group_transform(scene, g.owner).inverse();
     let piece = if chunked {
         &g.chunks[index]
     } else {
         &g.components[index]
     };
-    volume::near_plane_shadowed(
+    volume::near_plane_triangles(
         g,
         piece,
         to_local.transform_point3(light).as_dvec3(),
         &near_quad.map(|q| to_local.transform_point3(q).as_dvec3()),
         facing_epsilon,
     )
+    .collect()
 }

@@ -36,6 +36,9 @@ pub struct Component {
     pub edges: Vec<u32>,
     /// Bounds in the group's space.
     pub bounds: Aabb,
+    /// Whether it holds triangles of an alpha-tested material (rays pass through their holes
+    /// into the volume through its front cap, so it must count depth-fail).
+    pub alpha_tested: bool,
 }
 
 /// The casters of one owner, welded, with their connectivity and components.
@@ -262,6 +265,7 @@ impl CasterGroup {
                     triangles: Vec::new(),
                     edges: Vec::new(),
                     bounds: Aabb::EMPTY,
+                    alpha_tested: false,
                 });
                 components.len() as u32 - 1
             });
@@ -303,6 +307,7 @@ impl CasterGroup {
                     triangles,
                     edges: Vec::new(),
                     bounds,
+                    alpha_tested: false,
                 }
             })
             .collect();
@@ -326,6 +331,55 @@ impl CasterGroup {
         }
     }
 
+    /// Marks the components and chunks holding a triangle whose input triangle (in the order
+    /// given to [`CasterGroup::build`]) `alpha_tested` flags.
+    pub fn with_alpha_tested(mut self, alpha_tested: &[bool]) -> CasterGroup {
+        let c = &self.connectivity;
+        let flagged = |t: &u32| {
+            let source = c.source_triangle[*t as usize] as usize;
+            alpha_tested.get(source).copied().unwrap_or(false)
+        };
+        for piece in self.components.iter_mut().chain(self.chunks.iter_mut()) {
+            piece.alpha_tested = piece.triangles.iter().any(flagged);
+        }
+        self
+    }
+
+    /// The triangles of `piece` that `keep` says yes to, as a piece of their own: the edges
+    /// of `piece` they touch and their bounds. Its volume is closed along the cut like a
+    /// chunk's.
+    pub fn subset(&self, piece: &Component, keep: impl Fn(u32) -> bool) -> Component {
+        let c = &self.connectivity;
+        let triangles: Vec<u32> = piece
+            .triangles
+            .iter()
+            .copied()
+            .filter(|&t| keep(t))
+            .collect();
+        let edges = piece
+            .edges
+            .iter()
+            .copied()
+            .filter(|&e| {
+                c.triangles_of(&c.edges[e as usize])
+                    .iter()
+                    .any(|&t| keep(t))
+            })
+            .collect();
+        let mut bounds = Aabb::EMPTY;
+        for &t in &triangles {
+            for v in c.triangles[t as usize] {
+                bounds.extend(c.positions[v as usize]);
+            }
+        }
+        Component {
+            alpha_tested: piece.alpha_tested,
+            triangles,
+            edges,
+            bounds,
+        }
+    }
+
     /// The chunks `first..end` as one piece: their triangles, their edges (once each) and
     /// bounds. Its volume is theirs less the sides along the cuts between them.
     pub fn chunk_span(&self, first: usize, end: usize) -> Component {
@@ -340,6 +394,7 @@ impl CasterGroup {
                 .collect(),
             edges,
             bounds: span.iter().fold(Aabb::EMPTY, |b, c| b.union(&c.bounds)),
+            alpha_tested: span.iter().any(|c| c.alpha_tested),
         }
     }
 }
@@ -347,16 +402,17 @@ impl CasterGroup {
 impl CasterGroups {
     /// Groups the scene's casting triangles by owner, in each owner's own space.
     pub fn build(scene: &Scene) -> CasterGroups {
-        let mut by_owner: Vec<(SurfaceOwner, Vec<[Vec3; 3]>)> = Vec::new();
+        // Per owner: its triangles, and whether each is alpha-tested.
+        let mut by_owner: Vec<(SurfaceOwner, Vec<[Vec3; 3]>, Vec<bool>)> = Vec::new();
         for s in &scene.surfaces {
             let m = &scene.materials[s.material];
             if !(m.visible && m.casts_shadows) {
                 continue;
             }
-            let slot = match by_owner.iter().position(|(o, _)| *o == s.owner) {
+            let slot = match by_owner.iter().position(|(o, ..)| *o == s.owner) {
                 Some(i) => i,
                 None => {
-                    by_owner.push((s.owner, Vec::new()));
+                    by_owner.push((s.owner, Vec::new(), Vec::new()));
                     by_owner.len() - 1
                 }
             };
@@ -364,12 +420,15 @@ impl CasterGroups {
             for t in scene.indices[range].chunks_exact(3) {
                 let p = |k: usize| scene.vertices[t[k] as usize].pos();
                 by_owner[slot].1.push([p(0), p(1), p(2)]);
+                by_owner[slot].2.push(m.alpha_test.is_some());
             }
         }
         CasterGroups {
             groups: by_owner
                 .into_iter()
-                .map(|(owner, tris)| CasterGroup::build(owner, tris))
+                .map(|(owner, tris, alpha)| {
+                    CasterGroup::build(owner, tris).with_alpha_tested(&alpha)
+                })
                 .collect(),
         }
     }
@@ -424,6 +483,22 @@ pub fn near_plane_shadowed(
     quad: &[DVec3; 4],
     epsilon: f32,
 ) -> bool {
+    near_plane_triangles(group, piece, light, quad, epsilon)
+        .next()
+        .is_some()
+}
+
+/// The facing triangles of `piece` whose shadow may hold part of the near-plane rectangle (the
+/// test of [`near_plane_shadowed`], triangle by triangle), in the piece's order. The volume of
+/// the other triangles, closed along the cut, holds none of the rectangle: depth-pass counts
+/// it correctly.
+pub fn near_plane_triangles<'a>(
+    group: &'a CasterGroup,
+    piece: &'a Component,
+    light: DVec3,
+    quad: &[DVec3; 4],
+    epsilon: f32,
+) -> impl Iterator<Item = u32> + 'a {
     let hull = [light, quad[0], quad[1], quad[2], quad[3]];
     let hull_edges: [DVec3; 8] = [
         quad[0] - light,
@@ -435,13 +510,13 @@ pub fn near_plane_shadowed(
         quad[3] - quad[2],
         quad[0] - quad[3],
     ];
-    let mut hull_faces = vec![(quad[1] - quad[0]).cross(quad[3] - quad[0])];
+    let mut hull_faces = [(quad[1] - quad[0]).cross(quad[3] - quad[0]); 5];
     for i in 0..4 {
-        hull_faces.push(hull_edges[i].cross(hull_edges[(i + 1) % 4]));
+        hull_faces[i + 1] = hull_edges[i].cross(hull_edges[(i + 1) % 4]);
     }
     let c = &group.connectivity;
     let facing = facing_flags_of(group, piece, light, epsilon);
-    let separated = |axis: DVec3, tri: &[DVec3; 3]| -> bool {
+    let separated = move |axis: DVec3, tri: &[DVec3; 3]| -> bool {
         if axis.length_squared() == 0.0 {
             return false;
         }
@@ -459,7 +534,7 @@ pub fn near_plane_shadowed(
         }
         hmax < tmin || tmax < hmin
     };
-    piece.triangles.iter().any(|&t| {
+    piece.triangles.iter().copied().filter(move |&t| {
         if !facing[t as usize] {
             return false;
         }
@@ -990,6 +1065,7 @@ mod tests {
                 .components
                 .iter()
                 .fold(Aabb::EMPTY, |b, c| b.union(&c.bounds)),
+            alpha_tested: false,
         };
         let light = DVec3::new(0.0, 0.0, 5.5);
         let near_test = |quad: &[DVec3; 4]| near_plane_shadowed(&g, &piece, light, quad, 0.0);
@@ -1147,6 +1223,52 @@ mod tests {
             }
             assert!(inside > 20 && outside > 20, "{inside} {outside}");
         }
+    }
+
+    #[test]
+    fn a_piece_split_in_two_holds_what_the_whole_holds() {
+        // A slab of sixteen boxes welded into one component under a light.
+        let mut t = Vec::new();
+        for i in 0..4 {
+            for j in 0..4 {
+                let (x, y) = (i as f32 - 2.0, j as f32 - 2.0);
+                t.extend(tris(&cuboid(
+                    Vec3::new(x, y, 0.0),
+                    Vec3::new(x + 1.0, y + 1.0, 0.5),
+                    1.0,
+                )));
+            }
+        }
+        let g = CasterGroup::build(SurfaceOwner::World, t);
+        let light = DVec3::new(0.2, 0.1, 6.0);
+        // Finite and capped: every part is a closed mesh of finite points.
+        let mut s = settings(EdgeRule::Signed);
+        s.extrusion = Extrusion::Finite;
+        s.finite_distance = 20.0;
+        let (mut inside, mut checked) = (0, 0);
+        for c in &g.components {
+            // Every other triangle on one side of the cut.
+            let a = g.subset(c, |tri| tri % 2 == 0);
+            let b = g.subset(c, |tri| tri % 2 == 1);
+            assert_eq!(a.triangles.len() + b.triangles.len(), c.triangles.len());
+            assert!(a.edges.len() < c.edges.len() && b.edges.len() < c.edges.len());
+            let mesh = |piece: &Component| build_volume_of(&g, piece, light, &s, true, None);
+            let (whole, ma, mb) = (mesh(c), mesh(&a), mesh(&b));
+            assert!(ma.facing > 0 && mb.facing > 0);
+            // The parts' winding numbers add up to the whole's everywhere (points off the
+            // slab's faces, in and out of its shadow).
+            for i in 0..9 {
+                for j in 0..9 {
+                    let p = DVec3::new(-3.93 + i as f64, -3.87 + j as f64, -1.3 - 0.1 * j as f64);
+                    let w = winding(&whole.vertices, p);
+                    let sum = winding(&ma.vertices, p) + winding(&mb.vertices, p);
+                    assert!((w - sum).abs() < 1e-6, "{p}: {w} against {sum}");
+                    inside += (w.abs() > 0.5) as usize;
+                    checked += 1;
+                }
+            }
+        }
+        assert!(inside > 10 && inside < checked, "{inside} of {checked}");
     }
 
     #[test]

@@ -519,9 +519,9 @@ fn timings(ui: &mut egui::Ui, state: &ViewerState, frame: &Frame) {
         let chunks: usize = frame.volumes.iter().map(|v| v.chunks_merged).sum();
         ui.label(format!(
             "volumes: {quads} quads, {caps} cap triangles, {zfail} z-fail / {zpass} z-pass parts \
-             ({clipped} depth-clipped, {merged} merged from {chunks} chunks), {} stencil \
-             pass(es)",
-            p.stencil_passes
+             ({} split, {clipped} depth-clipped, {merged} merged from {chunks} chunks), {} \
+             stencil pass(es)",
+            p.split_parts, p.stencil_passes
         ));
     }
     // Frame-time graph.
