@@ -21,6 +21,11 @@ pub const MAX_PLANES: usize = 4;
 /// is tighter and costs more CPU per draw (at most about 17² blocks).
 const BLOCKS_SPAN: usize = 16;
 
+/// The smallest block side, in pixels, a rectangle is judged by: a small rectangle holds few
+/// fragments to save, so it gets fewer, coarser blocks rather than up to `BLOCKS_SPAN`² fine
+/// ones (the fit's cost grows with the blocks).
+const MIN_BLOCK_PIXELS: usize = 4;
+
 /// The grids (columns, rows) over the rectangle whose every cell gets a fitted plane: the
 /// whole, its halves both ways, its quarters and ninths.
 const GRIDS: [(usize, usize); 5] = [(1, 1), (2, 1), (1, 2), (2, 2), (3, 3)];
@@ -35,6 +40,12 @@ type Plane = [f64; 3];
 #[derive(Debug, Clone, PartialEq)]
 pub struct DepthBound {
     planes: Vec<Plane>,
+}
+
+/// How many blocks along its longer side `rect` is judged by.
+fn blocks_span(rect: &Scissor) -> usize {
+    let side = rect.width.max(rect.height).max(0) as usize;
+    (side / MIN_BLOCK_PIXELS).clamp(2, BLOCKS_SPAN)
 }
 
 /// One block of pixels: its corner pixel centres and centre in NDC, its pixel count and the
@@ -152,7 +163,7 @@ impl DepthBound {
         max_planes: usize,
     ) -> Option<DepthBound> {
         let samples = samples(
-            &depth.blocks(rect, BLOCKS_SPAN),
+            &depth.blocks(rect, blocks_span(rect)),
             camera.width,
             camera.height,
         );
