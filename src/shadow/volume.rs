@@ -346,8 +346,9 @@ impl CasterGroup {
     }
 
     /// The triangles of `piece` that `keep` says yes to, as a piece of their own: the edges
-    /// of `piece` they touch and their bounds. Its volume is closed along the cut like a
-    /// chunk's.
+    /// of `piece` with a triangle `keep` accepts (one outside `piece` adds an edge that
+    /// extrudes nothing: only the subset's triangles face the light in its build) and their
+    /// bounds. Its volume is closed along the cut like a chunk's.
     pub fn subset(&self, piece: &Component, keep: impl Fn(u32) -> bool) -> Component {
         let c = &self.connectivity;
         let triangles: Vec<u32> = piece
