@@ -21,6 +21,12 @@ pub const MAX_PLANES: usize = 4;
 /// is tighter and costs more CPU per draw (at most about 17² blocks).
 const BLOCKS_SPAN: usize = 16;
 
+/// The smallest rectangle, in pixels, that gets fitted planes; a smaller one gets the farthest
+/// depth alone. On the benchmark scenes' spawn views the fits below this size saved under 0.5%
+/// of the volume fragments (oa_dm3 7.90 → 7.93 million without them) for about a tenth to a
+/// third of the per-frame piece work.
+const MIN_FIT_AREA: u64 = 64 * 64;
+
 /// The smallest block side, in pixels, a rectangle is judged by: a small rectangle holds few
 /// fragments to save, so it gets fewer, coarser blocks rather than up to `BLOCKS_SPAN`² fine
 /// ones (the fit's cost grows with the blocks).
@@ -154,8 +160,9 @@ fn raised(mut p: Plane, samples: &[Sample]) -> Plane {
 impl DepthBound {
     /// The bound over `rect` from `depth` (the frame's depth after the base pass), of at most
     /// `max_planes` planes chosen greedily among the farthest depth, a plane fitted to the whole
-    /// rectangle and planes fitted to its halves and quarters (each lifted above every pixel).
-    /// None where nothing in the rectangle is nearer than the far plane (no plane would clip).
+    /// rectangle and planes fitted to its halves, quarters and ninths (each lifted above every
+    /// pixel); the farthest depth alone for a rectangle under [`MIN_FIT_AREA`] pixels. None
+    /// where nothing in the rectangle is nearer than the far plane (no plane would clip).
     pub fn fit(
         depth: &DepthPyramid,
         camera: &CameraSetup,
@@ -172,6 +179,9 @@ impl DepthBound {
             return None;
         }
         let mut candidates = vec![[0.0, 0.0, farthest]];
+        if rect.area() < MIN_FIT_AREA {
+            return Some(DepthBound { planes: candidates });
+        }
         // Sums per cell of a FINE×FINE grid over the blocks' centres; each grid of `GRIDS`
         // divides it evenly.
         let (lo, hi) = samples.iter().fold(
@@ -424,6 +434,9 @@ mod tests {
         assert!(least >= 0.0 && corner.planes() >= 2);
         assert!(corner_gap < one_gap / 2.0, "{corner_gap} vs {one_gap}");
         assert!(corner_gap < flat_gap / 3.0, "{corner_gap} vs {flat_gap}");
+        // A rectangle under MIN_FIT_AREA gets the farthest depth alone.
+        let small = DepthBound::fit(&p, &cam, &rect(10, 10, 40, 40), MAX_PLANES).unwrap();
+        assert_eq!(small.planes(), 1);
         // Nothing nearer than the far plane: nothing to clip.
         let (p, _) = pyramid(|_, _| 1.0);
         assert_eq!(DepthBound::fit(&p, &cam, &all, MAX_PLANES), None);
@@ -453,7 +466,8 @@ mod tests {
     fn clip_distances_keep_exactly_the_points_under_the_bound() {
         let cam = camera();
         let (p, _) = pyramid(|u, v| 0.7 + 0.2 * u - 0.1 * v * v);
-        let bound = DepthBound::fit(&p, &cam, &rect(10, 5, 60, 40), MAX_PLANES).unwrap();
+        let bound = DepthBound::fit(&p, &cam, &rect(8, 4, 80, 56), MAX_PLANES).unwrap();
+        assert!(bound.planes() >= 2, "{}", bound.planes());
         let planes = bound.clip_planes();
         assert!(planes[bound.planes()..].iter().all(|q| *q == [0.0; 4]));
         let mut kept = 0;
