@@ -395,11 +395,7 @@ impl VolumeCache {
             let model = volume::group_transform(scene, group.owner);
             let to_local = model.inverse();
             let light_local = to_local.transform_point3(light_world);
-            let whole = if p.chunked {
-                &group.chunks[p.component]
-            } else {
-                &group.components[p.component]
-            };
+            let whole = group.piece(p.component, p.chunked);
             let (id, subset, subset_key) = match p.triangles {
                 PartTriangles::All if p.chunked => {
                     (PieceId::Chunks(p.component, p.component + 1), None, 0)
@@ -407,8 +403,7 @@ impl VolumeCache {
                 PartTriangles::All => (PieceId::Component(p.component), None, 0),
                 PartTriangles::NearPlane(i) | PartTriangles::Rest(i) => {
                     let near_plane = matches!(p.triangles, PartTriangles::NearPlane(_));
-                    let mut listed = lp.near_plane_triangles[i].clone();
-                    listed.sort_unstable();
+                    let listed = &lp.near_plane_triangles[i];
                     let subset =
                         group.subset(whole, |t| listed.binary_search(&t).is_ok() == near_plane);
                     let id = PieceId::Split {
@@ -493,8 +488,9 @@ impl VolumeCache {
                 culling.hash(&mut h);
                 pieces.truncate.hash(&mut h);
                 p.local_radius.to_bits().hash(&mut h);
-                let near: Vec<u64> = p.near.iter().map(|&i| box_hashes[i as usize]).collect();
-                near.hash(&mut h);
+                for &i in &p.near {
+                    box_hashes[i as usize].hash(&mut h);
+                }
                 h.finish()
             };
             let key = part_key(light_world, o, p, &p.model, receivers_key);
@@ -513,11 +509,9 @@ impl VolumeCache {
                         Cow::Borrowed(&group.chunks[first])
                     }
                     (None, PieceId::Chunks(first, end)) => Cow::Owned(group.chunk_span(first, end)),
-                    (None, PieceId::Split { index, chunked, .. }) if chunked => {
-                        Cow::Borrowed(&group.chunks[index])
-                    }
-                    (None, PieceId::Component(i) | PieceId::Split { index: i, .. }) => {
-                        Cow::Borrowed(&group.components[i])
+                    (None, PieceId::Component(i)) => Cow::Borrowed(&group.components[i]),
+                    (None, PieceId::Split { index, chunked, .. }) => {
+                        Cow::Borrowed(group.piece(index, chunked))
                     }
                 };
                 let with_caps = p.counting == Counting::ZFail;

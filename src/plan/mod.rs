@@ -136,7 +136,7 @@ pub struct LightPlan {
     /// shadow reaches none of them is left out of its volume (empty: every triangle counts).
     pub volume_receivers: Vec<Aabb>,
     /// Per split piece (`PartTriangles`), its triangles whose shadow may hold part of the
-    /// near plane, in the piece's order.
+    /// near plane, sorted.
     pub near_plane_triangles: Vec<Vec<u32>>,
     /// How the technique was chosen (`auto`, or why the light needs no shadow work).
     pub reason: String,
@@ -340,7 +340,7 @@ impl Plan {
         let map_options_text = format!("{map_options:?}");
         // The planner culls pieces of at most CHUNK_TRIANGLES; the paper's frame, components.
         let chunked = on && p.cull_casters;
-        let components: Vec<(usize, usize, Aabb)> = groups
+        let components: Vec<(usize, usize, Aabb, &volume::CasterGroup)> = groups
             .iter()
             .flat_map(|g| g.groups.iter().enumerate())
             .flat_map(|(gi, g)| {
@@ -349,7 +349,7 @@ impl Plan {
                 pieces
                     .iter()
                     .enumerate()
-                    .map(move |(ci, c)| (gi, ci, c.bounds.transformed(&t)))
+                    .map(move |(ci, c)| (gi, ci, c.bounds.transformed(&t), g))
             })
             .collect();
 
@@ -567,7 +567,7 @@ impl Plan {
                         .iter()
                         .map(|&r| scene.surfaces[r as usize].bounds)
                         .collect();
-                    for &(group, component, bounds) in &components {
+                    for &(group, component, bounds, g) in &components {
                         let keep = !(on && p.cull_casters) || {
                             let shadow = cull::shadow_bounds(&bounds, pos, radius);
                             cull::sphere_meets_aabb(pos, radius, &bounds)
@@ -584,28 +584,13 @@ impl Plan {
                         let counting = if counting_auto {
                             // A ray seen through an alpha-tested caster's holes enters its
                             // volume through the front cap, which depth-pass does not draw.
-                            let alpha = match &groups {
-                                Some(gs) => {
-                                    let g = &gs.groups[group];
-                                    let piece = if chunked {
-                                        &g.chunks[component]
-                                    } else {
-                                        &g.components[component]
-                                    };
-                                    piece.alpha_tested
-                                }
-                                None => alpha_caster_bounds.iter().any(|b| b.intersects(&bounds)),
-                            };
+                            let alpha = g.piece(component, chunked).alpha_tested;
                             let boxed = volume::potentially_inside_shadow(&bounds, eye, pos, near);
-                            let triangle_test = (on && p.near_plane_test)
-                                .then_some(groups.as_ref())
-                                .flatten()
-                                .map(|gs| &gs.groups[group]);
-                            match (alpha, boxed, triangle_test) {
+                            match (alpha, boxed, on && p.near_plane_test) {
                                 (true, _, _) => Some(Counting::ZFail),
                                 (false, false, _) => Some(Counting::ZPass),
-                                (false, true, None) => Some(Counting::ZFail),
-                                (false, true, Some(g)) => {
+                                (false, true, false) => Some(Counting::ZFail),
+                                (false, true, true) => {
                                     let near_tris = near_plane_triangles(
                                         scene,
                                         g,
@@ -715,7 +700,8 @@ pub fn normal_matrix(model: &Mat4) -> Mat3 {
 
 /// `plan.near_plane_test` for one piece (a chunk, or a component when not `chunked`) of caster
 /// group `g`: its facing triangles whose shadow from a light at `light` may hold part of the
-/// camera's near-plane rectangle `near_quad` (world space), tested in the group's own space.
+/// camera's near-plane rectangle `near_quad` (world space), tested in the group's own space;
+/// sorted.
 fn near_plane_triangles(
     scene: &Scene,
     g: &volume::CasterGroup,
@@ -725,17 +711,15 @@ fn near_plane_triangles(
     facing_epsilon: f32,
 ) -> Vec<u32> {
     let to_local = volume::group_transform(scene, g.owner).inverse();
-    let piece = if chunked {
-        &g.chunks[index]
-    } else {
-        &g.components[index]
-    };
-    volume::near_plane_triangles(
+    let mut near: Vec<u32> = volume::near_plane_triangles(
         g,
-        piece,
+        g.piece(index, chunked),
         to_local.transform_point3(light).as_dvec3(),
         &near_quad.map(|q| to_local.transform_point3(q).as_dvec3()),
         facing_epsilon,
     )
-    .collect()
+    .collect();
+    // Sorted once here: both parts of the split look triangles up in it.
+    near.sort_unstable();
+    near
 }

@@ -331,6 +331,15 @@ impl CasterGroup {
         }
     }
 
+    /// Piece `index`: a chunk when `chunked` (the planner's unit), else a component.
+    pub fn piece(&self, index: usize, chunked: bool) -> &Component {
+        if chunked {
+            &self.chunks[index]
+        } else {
+            &self.components[index]
+        }
+    }
+
     /// Marks the components and chunks holding a triangle whose input triangle (in the order
     /// given to [`CasterGroup::build`]) `alpha_tested` flags.
     pub fn with_alpha_tested(mut self, alpha_tested: &[bool]) -> CasterGroup {
