@@ -596,6 +596,11 @@ define_options! {
         /// work every receiver whose box it hides wholly (a max-depth pyramid, as a GPU's
         /// hierarchical Z): casters that shadow only hidden receivers drop out.
         occlusion: bool = true;
+        /// Read that depth back as the farthest depth of each 4×4 block, reduced by a shader
+        /// (level 2 of the pyramid: the CPU converts and copies a sixteenth of the pixels),
+        /// instead of every pixel. Bounds on rectangles and boxes under about 16 pixels come
+        /// out a few pixels wider; every decision stays conservative.
+        reduce_depth: bool = true;
         /// Clip each depth-pass shadow-volume part's stencil draw (gl_ClipDistance) behind the
         /// depth buffer within its rectangle (read after the base pass): fragments there would
         /// fail the depth test, so they are not rasterised. A depth bounds test applied to the
@@ -607,6 +612,16 @@ define_options! {
         /// quarters and ninths, each lifted above every pixel; the draw keeps what lies under
         /// all of them (see `plan::depth_bounds`).
         depth_clip_planes: u32 = 4, in 1 ..= 4;
+        /// Keep the fitted clip planes for the next frame and use them while its depth buffer
+        /// (as read back for the planner) is the same: a fit reads nothing else but its
+        /// rectangle. A still camera over a still scene then fits nothing.
+        reuse_depth_fits: bool = true;
+        /// Leave out of each depth-clipped part's stencil draw the triangles one of its clip
+        /// planes rejects wholly (tested on the CPU, a block of triangles at a time where its
+        /// box decides, the rest drawn through an index list): the GL would clip them away,
+        /// but llvmpipe transforms and assembles them first, on the thread that issues the
+        /// draws. The same fragments either way.
+        cull_clipped: bool = true;
         /// Draw neighbouring shadow-volume chunks of one caster (the halves of the cuts
         /// `cull_casters` culls by) as one piece where a light keeps both with the same
         /// counting and their rectangles overlap: the sides each chunk extrudes along the

@@ -36,6 +36,7 @@ pub mod sources {
     pub const VOLUME_FRAG: &str = include_str!("../../shaders/volume.frag");
     pub const FULLSCREEN_VERT: &str = include_str!("../../shaders/fullscreen.vert");
     pub const FILL_FRAG: &str = include_str!("../../shaders/fill.frag");
+    pub const DEPTH_REDUCE_FRAG: &str = include_str!("../../shaders/depth_reduce.frag");
     pub const DEBUG_VOLUME_VERT: &str = include_str!("../../shaders/debug_volume.vert");
     pub const DEBUG_VOLUME_FRAG: &str = include_str!("../../shaders/debug_volume.frag");
 }
@@ -198,6 +199,12 @@ impl Program {
         if let Some(l) = self.uniform(name) {
             // SAFETY: as above.
             unsafe { gl.uniform_1_f32(Some(l), v) };
+        }
+    }
+    pub fn set_ivec2(&self, gl: &glow::Context, name: &str, v: [i32; 2]) {
+        if let Some(l) = self.uniform(name) {
+            // SAFETY: as above.
+            unsafe { gl.uniform_2_i32(Some(l), v[0], v[1]) };
         }
     }
     pub fn set_i32(&self, gl: &glow::Context, name: &str, v: i32) {

@@ -8,6 +8,7 @@
 
 use super::caps::{self, Caps};
 use super::debug;
+use super::depth_reduce::DepthReducer;
 use super::passes::lit::{LitShadow, ShadowBinding};
 use super::passes::shadow_map::{DepthTarget, copies_from_frame, copy_depth};
 use super::passes::{self, PassContext, set_scissor};
@@ -178,6 +179,8 @@ struct Programs {
     depth: Program,
     volume: Program,
     fill: Program,
+    /// The depth's 4×4 block maxima for the planner.
+    depth_reduce: Program,
     /// Volumes and silhouettes drawn over the frame (debug overlay).
     debug_volume: Program,
     /// Lit programs by their define set, compiled on first use.
@@ -209,6 +212,13 @@ impl Programs {
                 "fill",
                 sources::FULLSCREEN_VERT,
                 Some(sources::FILL_FRAG),
+                &[],
+            )?,
+            depth_reduce: Program::new(
+                gl,
+                "depth_reduce",
+                sources::FULLSCREEN_VERT,
+                Some(sources::DEPTH_REDUCE_FRAG),
                 &[],
             )?,
             debug_volume: Program::new(
@@ -254,6 +264,7 @@ impl Programs {
             &self.depth,
             &self.volume,
             &self.fill,
+            &self.depth_reduce,
             &self.debug_volume,
         ] {
             p.delete(gl);
@@ -278,6 +289,11 @@ pub struct Renderer {
     measure_targets: Option<(GBufferTarget, MaskTarget)>,
     /// Core profile draws need a bound VAO even without attributes (full-screen triangles).
     empty_vao: glow::VertexArray,
+    /// Created on the first frame that reduces its depth for the planner.
+    depth_reducer: Option<DepthReducer>,
+    /// The last depth read for the planner: a frame whose depth is the same keeps the fits
+    /// made for it.
+    last_depth: Option<DepthPyramid>,
     /// The shadow-map views of the last frame, for the depth-map debug view.
     last_maps: Vec<LastMap>,
     /// Each light's measured cost per technique, for `technique = auto`.
@@ -327,6 +343,8 @@ impl Renderer {
             volumes: VolumeCache::default(),
             measure_targets: None,
             empty_vao,
+            depth_reducer: None,
+            last_depth: None,
             last_maps: Vec::new(),
             costs: CostMemory::default(),
         })
@@ -666,8 +684,25 @@ impl Renderer {
             self.timer.end(gl);
             let t = Instant::now();
             let (w, h) = (self.target.width, self.target.height);
-            let values = debug::read_depth_bottom_up(gl, self.target.fbo, w, h);
-            let pyramid = DepthPyramid::from_bottom_up(values, w as usize, h as usize);
+            let pyramid = if options.plan.reduce_depth {
+                if !self.depth_reducer.as_ref().is_some_and(|r| r.fits(w, h)) {
+                    if let Some(old) = self.depth_reducer.take() {
+                        old.delete(gl);
+                    }
+                    let r = DepthReducer::new(gl, w, h).map_err(RenderError::Gl)?;
+                    self.depth_reducer = Some(r);
+                }
+                let reducer = self.depth_reducer.as_ref().expect("created above");
+                reducer.read(
+                    gl,
+                    &self.programs.depth_reduce,
+                    self.empty_vao,
+                    &self.target,
+                )
+            } else {
+                let values = debug::read_depth_bottom_up(gl, self.target.fbo, w, h);
+                DepthPyramid::from_bottom_up(values, w as usize, h as usize)
+            };
             self.timer
                 .record_cpu("occlusion", t.elapsed().as_secs_f64() * 1e3);
             self.target.bind(gl);
@@ -675,9 +710,21 @@ impl Renderer {
         } else {
             None
         };
+        // Frames that read no depth (other techniques) leave the last one standing.
+        let same_depth = match (&depth, &self.last_depth) {
+            (Some(new), Some(last)) => new.same_as(last),
+            _ => false,
+        };
+        let read = depth.is_some();
+        if read {
+            // The fits kept are those made for `last_depth`.
+            self.volumes
+                .begin_frame(same_depth && options.plan.reuse_depth_fits);
+            self.last_depth = depth;
+        }
         let pieces = PieceChoices {
             camera: &plan.camera,
-            depth: depth.as_ref(),
+            depth: self.last_depth.as_ref().filter(|_| read),
             occlusion: options.plan.occlusion,
             depth_clip: if options.plan.depth_clip {
                 options.plan.depth_clip_planes as usize
@@ -686,6 +733,8 @@ impl Renderer {
             },
             scissor: options.plan.enabled && options.plan.piece_scissor,
             merge: options.plan.enabled && options.plan.merge_pieces,
+            cull_clipped: options.plan.enabled && options.plan.cull_clipped,
+            reuse_fits: options.plan.reuse_depth_fits,
             truncate: options.plan.enabled && options.plan.truncate_volumes,
         };
         let prepare_start = Instant::now();
@@ -1089,6 +1138,9 @@ impl Drop for Renderer {
         if let Some((g, m)) = self.measure_targets.take() {
             g.delete(gl);
             m.delete(gl);
+        }
+        if let Some(r) = self.depth_reducer.take() {
+            r.delete(gl);
         }
         self.timer.delete(gl);
         // SAFETY: deleting our own VAO once.

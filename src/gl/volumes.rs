@@ -3,6 +3,7 @@
 //! caching is off.
 
 use crate::options::ShadowVolumeOptions;
+use crate::plan::clipped::{ClipTest, block_bounds};
 use crate::plan::depth_bounds::{DepthBound, MAX_PLANES};
 use crate::plan::merge::{KeptChunk, merged_spans};
 use crate::plan::occlusion::DepthPyramid;
@@ -48,6 +49,14 @@ pub struct VolumeStats {
     /// Drawn depth-pass parts clipped at the farthest depth of their rectangle
     /// (`plan.depth_clip`).
     pub parts_depth_clipped: usize,
+    /// Depth-pass parts whose clip planes were fitted before, for this rectangle and this
+    /// depth buffer: by an earlier frame with the same depth (`plan.reuse_depth_fits`), or
+    /// for another part or light of this frame.
+    pub depth_fits_reused: usize,
+    /// Triangles of those parts left out of the draw because one clip plane rejects all
+    /// three corners (`plan.cull_clipped`); a part left with none is not drawn. `quads` and
+    /// `cap_triangles` count the drawn parts' triangles before this.
+    pub triangles_clipped: usize,
     /// Mean share of the screen a drawn part's stencil draw is scissored to (1 without
     /// `plan.piece_scissor`).
     pub part_scissor_fraction: f64,
@@ -90,12 +99,16 @@ pub struct PartRange {
     pub scissor: Option<Scissor>,
     /// A clip-space plane its stencil draw is clipped to (`gl_ClipDistance`; zero: none).
     pub depth_clip: [[f32; 4]; MAX_PLANES],
+    /// The triangles the clip planes leave anything of, as (first, count) in the light's
+    /// index buffer (`plan.cull_clipped`); None: all of them, straight from the vertices.
+    pub elements: Option<(i32, i32)>,
 }
 
 impl PartRange {
-    /// False for a part whose rectangle is empty: its counts can change no receiver in view.
+    /// False for a part whose rectangle is empty (its counts can change no receiver in view)
+    /// or whose every triangle the clip planes reject.
     pub fn drawn(&self) -> bool {
-        self.scissor.is_none_or(|s| s.area() > 0)
+        self.scissor.is_none_or(|s| s.area() > 0) && self.elements.is_none_or(|(_, n)| n > 0)
     }
 }
 
@@ -105,9 +118,11 @@ impl PartRange {
 pub struct VolumeDraw {
     pub counting: Counting,
     pub model: Mat4,
+    /// Sides, then (depth-fail) caps, of every part in it: vertices, or with `indexed` the
+    /// light's index buffer's entries.
     pub first: i32,
-    /// Sides, then (depth-fail) caps, of every part in it.
     pub count: i32,
+    pub indexed: bool,
     pub scissor: Option<Scissor>,
     pub depth_clip: [[f32; 4]; MAX_PLANES],
 }
@@ -115,19 +130,15 @@ pub struct VolumeDraw {
 /// The clip-space planes beyond which a depth-pass part's fragments cannot change a count
 /// inside `rect`: they change counts only in front of the stored depth, so nothing behind a
 /// bound on it there matters (the volume's sides running on behind the walls). Zero (no
-/// clipping) for depth-fail parts and where no bound is nearer than the far plane.
+/// clipping) where no bound is nearer than the far plane. Depth-fail parts get none: their
+/// counts change behind the stored depth.
 fn depth_clip(
     depth: &DepthPyramid,
     camera: &CameraSetup,
     rect: &Scissor,
-    counting: Counting,
     planes: usize,
 ) -> [[f32; 4]; MAX_PLANES] {
-    match counting {
-        Counting::ZPass => DepthBound::fit(depth, camera, rect, planes)
-            .map_or([[0.0; 4]; MAX_PLANES], |b| b.clip_planes()),
-        Counting::ZFail => [[0.0; 4]; MAX_PLANES],
-    }
+    DepthBound::fit(depth, camera, rect, planes).map_or([[0.0; 4]; MAX_PLANES], |b| b.clip_planes())
 }
 
 pub struct LightVolumes {
@@ -144,11 +155,16 @@ pub struct LightVolumes {
     /// Vertices in the buffer: no draw may reach past them (llvmpipe reads out of bounds
     /// unchecked).
     uploaded_vertices: usize,
+    /// This frame's index buffer (`PartRange::elements`), rewritten every frame that has one.
+    ebo: glow::Buffer,
+    indices: Vec<u32>,
 }
 
 struct CachedPart {
     key: u64,
     mesh: volume::VolumeMesh,
+    /// The boxes of the mesh's blocks of triangles, for `plan.cull_clipped`.
+    blocks: Vec<Option<Aabb>>,
 }
 
 /// The planner's per-piece decisions that need the receivers a piece's shadow reaches (known
@@ -169,12 +185,24 @@ pub struct PieceChoices<'a> {
     pub depth_clip: usize,
     /// `plan.merge_pieces`: neighbouring chunks kept alike are drawn as one piece.
     pub merge: bool,
+    /// `plan.cull_clipped`: a depth-clipped part draws only the triangles its clip planes do
+    /// not wholly reject.
+    pub cull_clipped: bool,
+    /// `plan.reuse_depth_fits`: fits are kept for the next frame (used while its depth is the
+    /// same, see [`VolumeCache::begin_frame`]).
+    pub reuse_fits: bool,
 }
 
 #[derive(Default)]
 pub struct VolumeCache {
     lights: HashMap<usize, LightVolumes>,
+    /// The depth clip planes fitted since the depth buffer last changed, by rectangle and
+    /// plane count (`plan.reuse_depth_fits`): a fit reads nothing else.
+    fits: HashMap<FitKey, [[f32; 4]; MAX_PLANES]>,
 }
+
+/// A fit's inputs besides the depth: the rectangle and the planes allowed.
+type FitKey = ([i32; 4], usize);
 
 fn settings(o: &ShadowVolumeOptions) -> VolumeSettings {
     VolumeSettings {
@@ -217,22 +245,25 @@ fn part_key(
 fn draws_of(parts: &[PartRange]) -> Vec<VolumeDraw> {
     let mut draws: Vec<VolumeDraw> = Vec::new();
     for p in parts.iter().filter(|p| p.drawn()) {
-        let count = p.sides + p.caps;
+        let (first, count) = p.elements.unwrap_or((p.first, p.sides + p.caps));
+        let indexed = p.elements.is_some();
         match draws.last_mut() {
             Some(d)
                 if d.counting == p.counting
                     && d.model == p.model
                     && d.scissor == p.scissor
                     && d.depth_clip == p.depth_clip
-                    && d.first + d.count == p.first =>
+                    && d.indexed == indexed
+                    && d.first + d.count == first =>
             {
                 d.count += count;
             }
             _ => draws.push(VolumeDraw {
                 counting: p.counting,
                 model: p.model,
-                first: p.first,
+                first,
                 count,
+                indexed,
                 scissor: p.scissor,
                 depth_clip: p.depth_clip,
             }),
@@ -337,6 +368,14 @@ fn merge(
 }
 
 impl VolumeCache {
+    /// Once a frame, before [`VolumeCache::prepare`]: `same_depth` says the depth buffer
+    /// (at the frame's size) is the last frame's, so the fits made for it still hold.
+    pub fn begin_frame(&mut self, same_depth: bool) {
+        if !same_depth {
+            self.fits.clear();
+        }
+    }
+
     /// The light's volumes: parts whose key changed are rebuilt (all of them when `caching` is
     /// off), the buffer re-uploaded when its contents changed.
     pub fn prepare(
@@ -364,14 +403,23 @@ impl VolumeCache {
         let groups = scene.caster_groups();
         let s = settings(o);
         let light_world = scene.lights[lp.light].position;
+        let fits = &mut self.fits;
         let lv = match self.lights.entry(lp.light) {
             std::collections::hash_map::Entry::Occupied(e) => e.into_mut(),
             std::collections::hash_map::Entry::Vacant(e) => {
                 // SAFETY: a vertex array and a buffer of our own, kept for this light.
-                let (vao, vbo) = unsafe { (gl.create_vertex_array()?, gl.create_buffer()?) };
+                let (vao, vbo, ebo) = unsafe {
+                    (
+                        gl.create_vertex_array()?,
+                        gl.create_buffer()?,
+                        gl.create_buffer()?,
+                    )
+                };
                 e.insert(LightVolumes {
                     vao,
                     vbo,
+                    ebo,
+                    indices: Vec::new(),
                     parts: Vec::new(),
                     draws: Vec::new(),
                     stats: VolumeStats::default(),
@@ -533,7 +581,9 @@ impl VolumeCache {
                 stats.triangles_culled += mesh.culled;
                 stats.triangles_tested += piece.triangles.len();
                 stats.parts_built += 1;
-                lv.meshes.insert((p.group, p.id), CachedPart { key, mesh });
+                let blocks = block_bounds(&mesh.vertices);
+                lv.meshes
+                    .insert((p.group, p.id), CachedPart { key, mesh, blocks });
             }
             match p.counting {
                 Counting::ZFail => stats.zfail_parts += 1,
@@ -558,8 +608,11 @@ impl VolumeCache {
         // the camera turns, parts leave and enter the screen with nothing rebuilt).
         let mut layout = std::collections::hash_map::DefaultHasher::new();
         let mut drawn = 0usize;
+        let mut indices = std::mem::take(&mut lv.indices);
+        indices.clear();
         for (p, key) in order {
-            let mesh = &lv.meshes[&(p.group, p.id)].mesh;
+            let cached = &lv.meshes[&(p.group, p.id)];
+            let mesh = &cached.mesh;
             if mesh.vertices.is_empty() {
                 continue;
             }
@@ -572,25 +625,53 @@ impl VolumeCache {
                 sides: mesh.side_vertices as i32,
                 caps: mesh.cap_vertices as i32,
                 scissor: p.rect,
-                depth_clip: match pieces.depth.filter(|_| pieces.depth_clip > 0) {
+                depth_clip: match pieces
+                    .depth
+                    .filter(|_| pieces.depth_clip > 0 && p.counting == Counting::ZPass)
+                {
                     Some(depth) => {
-                        let full = Scissor::full(camera);
-                        depth_clip(
-                            depth,
-                            camera,
-                            &p.rect.or(lp.scissor).unwrap_or(full),
-                            p.counting,
-                            pieces.depth_clip,
-                        )
+                        let r = p.rect.or(lp.scissor).unwrap_or(Scissor::full(camera));
+                        let key = ([r.x, r.y, r.width, r.height], pieces.depth_clip);
+                        match fits.get(&key) {
+                            Some(planes) => {
+                                stats.depth_fits_reused += 1;
+                                *planes
+                            }
+                            None => {
+                                let planes = depth_clip(depth, camera, &r, pieces.depth_clip);
+                                if pieces.reuse_fits {
+                                    fits.insert(key, planes);
+                                }
+                                planes
+                            }
+                        }
                     }
                     None => [[0.0; 4]; MAX_PLANES],
                 },
+                elements: None,
             };
+            let mut range = range;
+            let test = ClipTest::new(camera.view_proj * p.model, &range.depth_clip)
+                .filter(|_| pieces.cull_clipped && range.drawn());
+            if let Some(test) = test {
+                let start = indices.len();
+                let rejected =
+                    test.kept_triangles(&mesh.vertices, &cached.blocks, total as u32, &mut indices);
+                if rejected > 0 {
+                    stats.triangles_clipped += rejected;
+                    range.elements = Some((start as i32, (indices.len() - start) as i32));
+                } else {
+                    // Nothing rejected: the vertices drawn as they are.
+                    indices.truncate(start);
+                }
+            }
             key.hash(&mut layout);
             total += mesh.vertices.len();
             parts.push(range);
             if !range.drawn() {
-                stats.parts_offscreen += 1;
+                if range.elements.is_none() {
+                    stats.parts_offscreen += 1;
+                }
                 continue;
             }
             drawn += 1;
@@ -637,19 +718,49 @@ impl VolumeCache {
             lv.uploaded = contents;
             lv.uploaded_vertices = vertices.len();
         }
+        if !indices.is_empty() {
+            // SAFETY: uploads plain u32 indices into the light's own vertex array's index
+            // buffer (bound while the array is, so the array keeps it).
+            unsafe {
+                gl.bind_vertex_array(Some(lv.vao));
+                gl.bind_buffer(glow::ELEMENT_ARRAY_BUFFER, Some(lv.ebo));
+                let bytes = std::slice::from_raw_parts(
+                    indices.as_ptr() as *const u8,
+                    std::mem::size_of_val(indices.as_slice()),
+                );
+                gl.buffer_data_u8_slice(glow::ELEMENT_ARRAY_BUFFER, bytes, glow::STREAM_DRAW);
+                gl.bind_vertex_array(None);
+                gl.bind_buffer(glow::ELEMENT_ARRAY_BUFFER, None);
+            }
+        }
         stats.build_ms = start.elapsed().as_secs_f64() * 1e3;
         let draws = draws_of(&parts);
+        // llvmpipe reads past a buffer unchecked: every draw and index must stay inside.
+        let uploaded = |d: &VolumeDraw| {
+            if d.indexed {
+                indices.len()
+            } else {
+                lv.uploaded_vertices
+            }
+        };
         if let Some(d) = draws
             .iter()
-            .find(|d| (d.first + d.count) as usize > lv.uploaded_vertices)
+            .find(|d| (d.first + d.count) as usize > uploaded(d))
         {
             return Err(format!(
-                "light {}: a volume draw ends at vertex {} past the {} uploaded",
+                "light {}: a volume draw ends at {} past the {} uploaded",
                 lp.light,
                 d.first + d.count,
-                lv.uploaded_vertices
+                uploaded(d)
             ));
         }
+        if indices.iter().any(|&i| i as usize >= lv.uploaded_vertices) {
+            return Err(format!(
+                "light {}: a volume index points past the {} vertices uploaded",
+                lp.light, lv.uploaded_vertices
+            ));
+        }
+        lv.indices = indices;
         lv.draws = draws;
         lv.parts = parts;
         lv.stats = stats;
@@ -663,7 +774,7 @@ impl VolumeCache {
 
     /// GL objects held (vertex arrays and buffers), for leak checks.
     pub fn object_count(&self) -> usize {
-        self.lights.len() * 2
+        self.lights.len() * 3
     }
 
     pub fn delete(&mut self, gl: &glow::Context) {
@@ -672,6 +783,7 @@ impl VolumeCache {
             unsafe {
                 gl.delete_vertex_array(v.vao);
                 gl.delete_buffer(v.vbo);
+                gl.delete_buffer(v.ebo);
             }
         }
     }

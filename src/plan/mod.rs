@@ -3,6 +3,7 @@
 //! The GL layer executes a [`Plan`] and decides nothing about *what* to draw.
 
 pub mod auto;
+pub mod clipped;
 pub mod cull;
 pub mod depth_bounds;
 pub mod frustum;

@@ -15,8 +15,15 @@ pub(crate) const DEPTH_MARGIN: f32 = 1.0 / (1 << 16) as f32;
 /// Max-depth mip chain of a depth image (window depth, 0 near .. 1 far).
 #[derive(Debug)]
 pub struct DepthPyramid {
-    /// Level 0 is the image (rows bottom-up, as GL's window coordinates); level k+1 holds the
-    /// maximum of each 2×2 block of level k (edges padded by repetition).
+    /// The image's size in pixels.
+    width: usize,
+    height: usize,
+    /// The finest level held: 0 for the image itself, k for the maxima of its 2^k×2^k blocks
+    /// (reduced on the GPU, see `gl::depth_reduce`).
+    first: usize,
+    /// Level `first + i` is `levels[i]`. Level 0 is the image (rows bottom-up, as GL's window
+    /// coordinates); level k+1 holds the maximum of each 2×2 block of level k (edges padded by
+    /// repetition).
     levels: Vec<Level>,
 }
 
@@ -87,17 +94,38 @@ impl DepthPyramid {
     /// From `depth` in window coordinates' row order (bottom row first, as GL reads them).
     /// None when the sizes disagree.
     pub fn from_bottom_up(depth: Vec<f32>, width: usize, height: usize) -> Option<DepthPyramid> {
-        if width == 0 || height == 0 || depth.len() != width * height {
+        let surface = depth
+            .iter()
+            .map(|&d| if d < 1.0 { d } else { -1.0 })
+            .collect();
+        DepthPyramid::from_level(0, depth, surface, width, height)
+    }
+
+    /// From level `first` of a `width`×`height` image's pyramid (bottom row first): the
+    /// maximum depth of each 2^first×2^first block (the last column and row of pixels
+    /// repeated past the edge), and the maximum over its pixels nearer than the far plane
+    /// (negative where none is). None when the sizes disagree.
+    pub fn from_level(
+        first: usize,
+        max: Vec<f32>,
+        surface: Vec<f32>,
+        width: usize,
+        height: usize,
+    ) -> Option<DepthPyramid> {
+        if width == 0 || height == 0 || first > 16 {
             return None;
         }
-        let max = depth;
-        let surface = max
-            .iter()
-            .map(|&d| if d < 1.0 { d } else { NO_SURFACE })
+        let (w, h) = (width.div_ceil(1 << first), height.div_ceil(1 << first));
+        if max.len() != w * h || surface.len() != w * h {
+            return None;
+        }
+        let surface = surface
+            .into_iter()
+            .map(|d| if d >= 0.0 { d } else { NO_SURFACE })
             .collect();
         let mut levels = vec![Level {
-            width,
-            height,
+            width: w,
+            height: h,
             max,
             surface,
         }];
@@ -110,25 +138,41 @@ impl DepthPyramid {
             };
             levels.push(next);
         }
-        Some(DepthPyramid { levels })
+        Some(DepthPyramid {
+            width,
+            height,
+            first,
+            levels,
+        })
     }
 
-    /// The finest level where `pixels` span at most `texels` texels.
+    /// Whether `other` holds the same image at the same level (so every bound read from
+    /// either is the same).
+    pub fn same_as(&self, other: &DepthPyramid) -> bool {
+        (self.width, self.height, self.first) == (other.width, other.height, other.first)
+            && self.levels[0].max == other.levels[0].max
+            && self.levels[0].surface == other.levels[0].surface
+    }
+
+    /// The finest level held where `pixels` span at most `texels` texels.
     fn level_for(&self, pixels: usize, texels: usize) -> usize {
-        let mut k = 0;
-        while k + 1 < self.levels.len() && (pixels >> k) > texels.max(1) {
+        let mut k = self.first;
+        while k + 1 < self.first + self.levels.len() && (pixels >> k) > texels.max(1) {
             k += 1;
         }
         k
     }
 
+    fn level(&self, k: usize) -> &Level {
+        &self.levels[k - self.first]
+    }
+
     /// The largest depth over the pixels `x0..=x1`, `y0..=y1` (GL window coordinates, clamped
     /// to the image), from the level where the rectangle spans at most 4×4 texels.
     fn max_over(&self, x0: usize, y0: usize, x1: usize, y1: usize) -> f32 {
-        let base = &self.levels[0];
-        let (x1, y1) = (x1.min(base.width - 1), y1.min(base.height - 1));
+        let (x1, y1) = (x1.min(self.width - 1), y1.min(self.height - 1));
         let k = self.level_for((x1 - x0).max(y1 - y0) + 1, 4);
-        let l = &self.levels[k];
+        let l = self.level(k);
         let mut m = 0.0f32;
         for y in (y0 >> k)..=(y1 >> k).min(l.height - 1) {
             for x in (x0 >> k)..=(x1 >> k).min(l.width - 1) {
@@ -143,12 +187,11 @@ impl DepthPyramid {
     /// and the largest depth it holds (which may reach past the rectangle: a bound). Empty for
     /// an empty rectangle or one off the image.
     pub fn blocks(&self, rect: &Scissor, span: usize) -> Vec<DepthBlock> {
-        let base = &self.levels[0];
         let image = Scissor {
             x: 0,
             y: 0,
-            width: base.width as i32,
-            height: base.height as i32,
+            width: self.width as i32,
+            height: self.height as i32,
         };
         let r = rect.intersect(&image);
         if r.area() == 0 {
@@ -157,7 +200,7 @@ impl DepthPyramid {
         let (x0, y0) = (r.x as usize, r.y as usize);
         let (x1, y1) = (x0 + r.width as usize - 1, y0 + r.height as usize - 1);
         let k = self.level_for((x1 - x0).max(y1 - y0) + 1, span);
-        let l = &self.levels[k];
+        let l = self.level(k);
         let mut blocks = Vec::new();
         for ty in (y0 >> k)..=(y1 >> k).min(l.height - 1) {
             for tx in (x0 >> k)..=(x1 >> k).min(l.width - 1) {
@@ -188,8 +231,7 @@ impl DepthPyramid {
     /// point of the box is visible. Conservative: a box reaching the camera's near plane, or
     /// whose projection is not bounded, is visible.
     pub fn hides(&self, camera: &CameraSetup, b: &Aabb) -> bool {
-        let base = &self.levels[0];
-        if base.width != camera.width as usize || base.height != camera.height as usize {
+        if self.width != camera.width as usize || self.height != camera.height as usize {
             return false;
         }
         let Projection::Bounded { lo, hi, nearest } = project(camera, &b.corners()) else {
@@ -272,6 +314,68 @@ mod tests {
             let ahead = small_box(Vec3::new(80.0, 0.0, 0.0));
             assert_eq!(p.hides(&c, &ahead), !seen, "hole at {x},{y}");
         }
+    }
+
+    #[test]
+    fn a_pyramid_from_block_maxima_holds_the_full_one_above_them() {
+        let (w, h) = (37usize, 23usize);
+        // Bottom-up rows; every fifth pixel at the far plane.
+        let depth: Vec<f32> = (0..w * h)
+            .map(|i| {
+                if i % 5 == 0 {
+                    1.0
+                } else {
+                    ((i * 7919) % 1009) as f32 / 1010.0
+                }
+            })
+            .collect();
+        let full = DepthPyramid::from_bottom_up(depth.clone(), w, h).unwrap();
+        // Level 2 by brute force, as the GPU reduction computes it (edges clamped).
+        let (bw, bh) = (w.div_ceil(4), h.div_ceil(4));
+        let (mut max, mut surface) = (Vec::new(), Vec::new());
+        for by in 0..bh {
+            for bx in 0..bw {
+                let pixels: Vec<f32> = (0..16)
+                    .map(|i| {
+                        let (x, y) = ((4 * bx + i % 4).min(w - 1), (4 * by + i / 4).min(h - 1));
+                        depth[y * w + x]
+                    })
+                    .collect();
+                max.push(pixels.iter().copied().fold(0.0, f32::max));
+                surface.push(
+                    pixels
+                        .iter()
+                        .copied()
+                        .filter(|&d| d < 1.0)
+                        .fold(-1.0, f32::max),
+                );
+            }
+        }
+        let reduced = DepthPyramid::from_level(2, max, surface, w, h).unwrap();
+        assert_eq!(reduced.levels.len() + 2, full.levels.len());
+        for (a, b) in reduced.levels.iter().zip(&full.levels[2..]) {
+            assert_eq!((a.width, a.height), (b.width, b.height));
+            assert_eq!(a.max, b.max);
+            assert_eq!(a.surface, b.surface);
+        }
+        // Judged by its coarser levels, every bound still holds.
+        assert!(reduced.max_over(3, 4, 3, 4) >= depth[4 * w + 3]);
+        assert_eq!(
+            reduced
+                .blocks(
+                    &Scissor {
+                        x: 0,
+                        y: 0,
+                        width: 2,
+                        height: 2
+                    },
+                    16
+                )
+                .len(),
+            1
+        );
+        // Sizes that disagree are refused.
+        assert!(DepthPyramid::from_level(2, vec![0.0; 3], vec![0.0; 3], w, h).is_none());
     }
 
     #[test]

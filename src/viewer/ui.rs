@@ -517,10 +517,13 @@ fn timings(ui: &mut egui::Ui, state: &ViewerState, frame: &Frame) {
         let clipped: usize = frame.volumes.iter().map(|v| v.parts_depth_clipped).sum();
         let merged: usize = frame.volumes.iter().map(|v| v.merged_parts).sum();
         let chunks: usize = frame.volumes.iter().map(|v| v.chunks_merged).sum();
+        let left_out: usize = frame.volumes.iter().map(|v| v.triangles_clipped).sum();
+        let refits: usize = frame.volumes.iter().map(|v| v.depth_fits_reused).sum();
         ui.label(format!(
             "volumes: {quads} quads, {caps} cap triangles, {zfail} z-fail / {zpass} z-pass parts \
              ({} split, {clipped} depth-clipped, {merged} merged from {chunks} chunks), {} \
-             stencil pass(es)",
+             stencil pass(es); {left_out} triangles left out wholly clipped, {refits} depth \
+             fits reused",
             p.split_parts, p.stencil_passes
         ));
     }

@@ -53,7 +53,11 @@ fn draw_parts(gl: &glow::Context, program: &Program, v: &LightVolumes, counting:
             for (name, plane) in DEPTH_CLIP_UNIFORMS.iter().zip(&d.depth_clip) {
                 program.set_vec4(gl, name, glam::Vec4::from_array(*plane));
             }
-            gl.draw_arrays(glow::TRIANGLES, d.first, d.count);
+            if d.indexed {
+                gl.draw_elements(glow::TRIANGLES, d.count, glow::UNSIGNED_INT, d.first * 4);
+            } else {
+                gl.draw_arrays(glow::TRIANGLES, d.first, d.count);
+            }
         }
         gl.bind_vertex_array(None);
     }
