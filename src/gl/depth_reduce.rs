@@ -5,7 +5,7 @@
 //! it judges but the smallest, and those get a bound a few pixels wider.
 
 use super::program::Program;
-use super::target::{Framebuffer, read_pixels_bottom_up, set_nearest_clamp};
+use super::target::{Framebuffer, framebuffer_of, read_pixels_bottom_up, texture_2d};
 use crate::plan::occlusion::DepthPyramid;
 use glow::HasContext;
 
@@ -23,43 +23,14 @@ impl DepthReducer {
     /// A target for a `width`×`height` frame.
     pub fn new(gl: &glow::Context, width: u32, height: u32) -> Result<DepthReducer, String> {
         let size = (width.div_ceil(1 << LEVEL), height.div_ceil(1 << LEVEL));
-        // SAFETY: objects created here and owned by the returned value; bindings reset to 0.
-        unsafe {
-            let texture = gl.create_texture()?;
-            gl.bind_texture(glow::TEXTURE_2D, Some(texture));
-            gl.tex_image_2d(
-                glow::TEXTURE_2D,
-                0,
-                glow::RG32F as i32,
-                size.0 as i32,
-                size.1 as i32,
-                0,
-                glow::RG,
-                glow::FLOAT,
-                glow::PixelUnpackData::Slice(None),
-            );
-            set_nearest_clamp(gl);
-            gl.bind_texture(glow::TEXTURE_2D, None);
-            let fbo = gl.create_framebuffer()?;
-            gl.bind_framebuffer(glow::FRAMEBUFFER, Some(fbo));
-            gl.framebuffer_texture_2d(
-                glow::FRAMEBUFFER,
-                glow::COLOR_ATTACHMENT0,
-                glow::TEXTURE_2D,
-                Some(texture),
-                0,
-            );
-            let status = gl.check_framebuffer_status(glow::FRAMEBUFFER);
-            gl.bind_framebuffer(glow::FRAMEBUFFER, None);
-            let r = DepthReducer { fbo, texture, size };
-            if status != glow::FRAMEBUFFER_COMPLETE {
-                r.delete(gl);
-                return Err(format!(
-                    "the depth reduction target ({}x{} RG32F) is incomplete (status 0x{status:x})",
-                    size.0, size.1
-                ));
+        let texture = texture_2d(gl, glow::RG32F, glow::RG, glow::FLOAT, size.0, size.1)?;
+        match framebuffer_of(gl, texture, None, "depth reduction (RG32F)") {
+            Ok(fbo) => Ok(DepthReducer { fbo, texture, size }),
+            Err(e) => {
+                // SAFETY: the texture made above, attached to nothing now.
+                unsafe { gl.delete_texture(texture) };
+                Err(e)
             }
-            Ok(r)
         }
     }
 

@@ -254,7 +254,7 @@ pub fn set_nearest_clamp(gl: &glow::Context) {
     }
 }
 
-fn texture_2d(
+pub(crate) fn texture_2d(
     gl: &glow::Context,
     internal: u32,
     format: u32,
@@ -280,6 +280,43 @@ fn texture_2d(
         set_nearest_clamp(gl);
         gl.bind_texture(glow::TEXTURE_2D, None);
         Ok(t)
+    }
+}
+
+/// A framebuffer drawing into `color` (and testing against `depth_stencil`), checked
+/// complete; deleted again if it is not. Leaves framebuffer 0 bound.
+pub(crate) fn framebuffer_of(
+    gl: &glow::Context,
+    color: glow::Texture,
+    depth_stencil: Option<glow::Texture>,
+    what: &str,
+) -> Result<glow::Framebuffer, String> {
+    // SAFETY: a framebuffer of our own with the caller's textures attached.
+    unsafe {
+        let fbo = gl.create_framebuffer()?;
+        gl.bind_framebuffer(glow::FRAMEBUFFER, Some(fbo));
+        gl.framebuffer_texture_2d(
+            glow::FRAMEBUFFER,
+            glow::COLOR_ATTACHMENT0,
+            glow::TEXTURE_2D,
+            Some(color),
+            0,
+        );
+        if let Some(ds) = depth_stencil {
+            gl.framebuffer_texture_2d(
+                glow::FRAMEBUFFER,
+                glow::DEPTH_STENCIL_ATTACHMENT,
+                glow::TEXTURE_2D,
+                Some(ds),
+                0,
+            );
+        }
+        let ok = check_complete(gl, what);
+        gl.bind_framebuffer(glow::FRAMEBUFFER, None);
+        if ok.is_err() {
+            gl.delete_framebuffer(fbo);
+        }
+        ok.map(|()| fbo)
     }
 }
 
@@ -395,37 +432,18 @@ impl MaskTarget {
             frame.width,
             frame.height,
         )?;
-        // SAFETY: attaches our texture and the frame's depth/stencil texture.
-        unsafe {
-            let fbo = gl.create_framebuffer()?;
-            gl.bind_framebuffer(glow::FRAMEBUFFER, Some(fbo));
-            gl.framebuffer_texture_2d(
-                glow::FRAMEBUFFER,
-                glow::COLOR_ATTACHMENT0,
-                glow::TEXTURE_2D,
-                Some(mask),
-                0,
-            );
-            gl.framebuffer_texture_2d(
-                glow::FRAMEBUFFER,
-                glow::DEPTH_STENCIL_ATTACHMENT,
-                glow::TEXTURE_2D,
-                Some(frame.depth_stencil),
-                0,
-            );
-            let t = MaskTarget {
+        match framebuffer_of(gl, mask, Some(frame.depth_stencil), "mask") {
+            Ok(fbo) => Ok(MaskTarget {
                 fbo,
                 mask,
                 width: frame.width,
                 height: frame.height,
-            };
-            let ok = check_complete(gl, "mask");
-            gl.bind_framebuffer(glow::FRAMEBUFFER, None);
-            if let Err(e) = ok {
-                t.delete(gl);
-                return Err(e);
+            }),
+            Err(e) => {
+                // SAFETY: the texture made above, attached to nothing now.
+                unsafe { gl.delete_texture(mask) };
+                Err(e)
             }
-            Ok(t)
         }
     }
 

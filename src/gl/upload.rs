@@ -133,11 +133,7 @@ impl GpuScene {
             gl.bind_vertex_array(Some(vao));
             let vbo = gl.create_buffer()?;
             gl.bind_buffer(glow::ARRAY_BUFFER, Some(vbo));
-            let bytes = std::slice::from_raw_parts(
-                scene.vertices.as_ptr() as *const u8,
-                std::mem::size_of_val(scene.vertices.as_slice()),
-            );
-            gl.buffer_data_u8_slice(glow::ARRAY_BUFFER, bytes, glow::STATIC_DRAW);
+            buffer_data(gl, glow::ARRAY_BUFFER, &scene.vertices, glow::STATIC_DRAW);
             let stride = std::mem::size_of::<Vertex>() as i32;
             let attrs: [(u32, i32, i32); 4] = [(0, 3, 0), (1, 3, 12), (2, 2, 24), (3, 2, 32)];
             for (loc, size, offset) in attrs {
@@ -148,11 +144,7 @@ impl GpuScene {
             gl.vertex_attrib_pointer_f32(4, 4, glow::UNSIGNED_BYTE, true, stride, 40);
             let ibo = gl.create_buffer()?;
             gl.bind_buffer(glow::ELEMENT_ARRAY_BUFFER, Some(ibo));
-            let ibytes = std::slice::from_raw_parts(
-                indices.as_ptr() as *const u8,
-                std::mem::size_of_val(indices.as_slice()),
-            );
-            gl.buffer_data_u8_slice(glow::ELEMENT_ARRAY_BUFFER, ibytes, glow::STATIC_DRAW);
+            buffer_data(gl, glow::ELEMENT_ARRAY_BUFFER, &indices, glow::STATIC_DRAW);
             gl.bind_vertex_array(None);
             let textures = scene
                 .textures
@@ -238,5 +230,21 @@ impl GpuScene {
             }
             gl.delete_texture(self.white);
         }
+    }
+}
+
+/// Data a GL buffer may hold as its bytes: `repr(C)` or primitive, without padding.
+pub(crate) trait Plain: Copy {}
+impl Plain for u32 {}
+impl Plain for [f32; 4] {}
+impl Plain for Vertex {}
+
+/// Fills the buffer bound to `target` with `data`.
+pub(crate) fn buffer_data<T: Plain>(gl: &glow::Context, target: u32, data: &[T], usage: u32) {
+    // SAFETY: T has no padding (see `Plain`), so every byte of the slice is initialised.
+    unsafe {
+        let bytes =
+            std::slice::from_raw_parts(data.as_ptr() as *const u8, std::mem::size_of_val(data));
+        gl.buffer_data_u8_slice(target, bytes, usage);
     }
 }

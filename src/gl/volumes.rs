@@ -2,6 +2,7 @@
 //! changed (the light, a caster's transform, the build settings, the counting of a part) unless
 //! caching is off.
 
+use super::upload::buffer_data;
 use crate::options::ShadowVolumeOptions;
 use crate::plan::clipped::{ClipTest, block_bounds};
 use crate::plan::depth_bounds::{DepthBound, MAX_PLANES};
@@ -705,11 +706,7 @@ impl VolumeCache {
             unsafe {
                 gl.bind_vertex_array(Some(lv.vao));
                 gl.bind_buffer(glow::ARRAY_BUFFER, Some(lv.vbo));
-                let bytes = std::slice::from_raw_parts(
-                    vertices.as_ptr() as *const u8,
-                    std::mem::size_of_val(vertices.as_slice()),
-                );
-                gl.buffer_data_u8_slice(glow::ARRAY_BUFFER, bytes, glow::DYNAMIC_DRAW);
+                buffer_data(gl, glow::ARRAY_BUFFER, &vertices, glow::DYNAMIC_DRAW);
                 gl.enable_vertex_attrib_array(0);
                 gl.vertex_attrib_pointer_f32(0, 4, glow::FLOAT, false, 16, 0);
                 gl.bind_vertex_array(None);
@@ -724,11 +721,7 @@ impl VolumeCache {
             unsafe {
                 gl.bind_vertex_array(Some(lv.vao));
                 gl.bind_buffer(glow::ELEMENT_ARRAY_BUFFER, Some(lv.ebo));
-                let bytes = std::slice::from_raw_parts(
-                    indices.as_ptr() as *const u8,
-                    std::mem::size_of_val(indices.as_slice()),
-                );
-                gl.buffer_data_u8_slice(glow::ELEMENT_ARRAY_BUFFER, bytes, glow::STREAM_DRAW);
+                buffer_data(gl, glow::ELEMENT_ARRAY_BUFFER, &indices, glow::STREAM_DRAW);
                 gl.bind_vertex_array(None);
                 gl.bind_buffer(glow::ELEMENT_ARRAY_BUFFER, None);
             }
