@@ -616,6 +616,11 @@ define_options! {
         /// (as read back for the planner) is the same: a fit reads nothing else but its
         /// rectangle. A still camera over a still scene then fits nothing.
         reuse_depth_fits: bool = true;
+        /// Keep each light's shadow-volume draws (parts, rectangles, clip planes, index lists)
+        /// and draw them again while nothing they are made from changed: the light's plan,
+        /// the camera, the depth read back, the volume options, the light and the casters'
+        /// transforms. A still camera over a still scene then redoes none of the piece work.
+        reuse_volume_draws: bool = true;
         /// Leave out of each depth-clipped part's stencil draw the triangles one of its clip
         /// planes rejects wholly (tested on the CPU, a block of triangles at a time where its
         /// box decides, the rest drawn through an index list): the GL would clip them away,

@@ -388,7 +388,11 @@ fn the_gpu_depth_reduction_is_the_pyramid_of_the_full_readback() {
 #[test]
 fn depth_fits_are_reused_only_while_the_depth_stays() {
     let (scene, _, options) = load_scene_file("wrackdm17");
-    let reuse = with(&options, &["technique=shadow_volume"]);
+    // Draws kept whole would hide the fits: off here (see the next test).
+    let reuse = with(
+        &options,
+        &["technique=shadow_volume", "plan.reuse_volume_draws=false"],
+    );
     let fresh = with(&reuse, &["plan.reuse_depth_fits=false"]);
     let (ctx, mut r) = gl_on(BackendChoice::Egl, &reuse);
     let mut c = Renderer::new(ctx.gl.clone(), reuse.width, reuse.height).unwrap();
@@ -897,4 +901,45 @@ fn depth_pass_is_not_chosen_for_alpha_tested_casters() {
         (differing as f64) < 0.0002 * receivers(&b) as f64,
         "{differing} pixels differ"
     );
+}
+
+/// A light's volume draws are kept while nothing they are made from changes
+/// (`plan.reuse_volume_draws`): the same view again draws them as they were, a turned camera
+/// makes them anew, and the masks are those of a renderer that makes them every frame.
+#[test]
+fn volume_draws_are_reused_only_while_their_inputs_stay() {
+    let (scene, _, options) = load_scene_file("wrackdm17");
+    let reuse = with(&options, &["technique=shadow_volume"]);
+    let fresh = with(
+        &reuse,
+        &[
+            "plan.reuse_volume_draws=false",
+            "plan.reuse_depth_fits=false",
+        ],
+    );
+    let (ctx, mut r) = gl_on(BackendChoice::Egl, &reuse);
+    let mut c = Renderer::new(ctx.gl.clone(), reuse.width, reuse.height).unwrap();
+    r.load_scene(&scene).unwrap();
+    c.load_scene(&scene).unwrap();
+    let path = camera_path(&scene.camera, 4, 48.0);
+    let reused = |f: &Frame| f.volumes.iter().filter(|v| v.draws_reused).count();
+    let mut shadows = 0;
+    for (cam, kept) in [
+        (&path[0], false),
+        (&path[0], true),
+        (&path[1], false),
+        (&path[1], true),
+        (&path[0], false),
+    ] {
+        let a = r.render_at(&scene, cam, &reuse, masks()).unwrap();
+        let b = c.render_at(&scene, cam, &fresh, masks()).unwrap();
+        assert_eq!(reused(&b), 0);
+        assert!(!a.volumes.is_empty());
+        let expected = if kept { a.volumes.len() } else { 0 };
+        assert_eq!(reused(&a), expected, "kept: {kept}");
+        let differing: usize = mask_differences(&a, &b).iter().map(|d| d.1).sum();
+        assert_eq!(differing, 0);
+        shadows += shadowed(&a);
+    }
+    assert!(shadows > 10_000, "{shadows} shadowed pixels along the path");
 }

@@ -735,6 +735,8 @@ impl Renderer {
             merge: options.plan.enabled && options.plan.merge_pieces,
             cull_clipped: options.plan.enabled && options.plan.cull_clipped,
             reuse_fits: options.plan.reuse_depth_fits,
+            reuse_draws: options.plan.enabled && options.plan.reuse_volume_draws,
+            depth_unchanged: !read || same_depth,
             truncate: options.plan.enabled && options.plan.truncate_volumes,
         };
         let prepare_start = Instant::now();

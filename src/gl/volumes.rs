@@ -68,6 +68,9 @@ pub struct VolumeStats {
     /// Parts built this frame, and parts reused from earlier frames.
     pub parts_built: usize,
     pub parts_reused: usize,
+    /// The last frame's draws, drawn as they were: nothing they are made from changed
+    /// (`plan.reuse_volume_draws`); the other counts are theirs.
+    pub draws_reused: bool,
 }
 
 /// Which triangles of a caster group one drawn piece holds.
@@ -159,6 +162,51 @@ pub struct LightVolumes {
     /// This frame's index buffer (`PartRange::elements`), rewritten every frame that has one.
     ebo: glow::Buffer,
     indices: Vec<u32>,
+    /// What the draws were made from (`plan.reuse_volume_draws`; None: not kept).
+    inputs: Option<DrawInputs>,
+}
+
+/// Everything a light's volume draws are made from but the depth buffer: the light's plan, the
+/// camera, the volume options and the planner's choices, the light and the casters'
+/// transforms. With the depth unchanged too, the draws are what they were.
+#[derive(PartialEq)]
+struct DrawInputs {
+    plan: LightPlan,
+    camera: CameraSetup,
+    options: ShadowVolumeOptions,
+    choices: ([bool; 7], usize),
+    light: (glam::Vec3, f32),
+    transforms: Vec<Mat4>,
+}
+
+impl DrawInputs {
+    fn of(scene: &Scene, lp: &LightPlan, o: &ShadowVolumeOptions, p: &PieceChoices) -> Self {
+        let groups = scene.caster_groups();
+        let light = &scene.lights[lp.light];
+        DrawInputs {
+            plan: lp.clone(),
+            camera: *p.camera,
+            options: o.clone(),
+            choices: (
+                [
+                    p.depth.is_some(),
+                    p.occlusion,
+                    p.scissor,
+                    p.truncate,
+                    p.merge,
+                    p.cull_clipped,
+                    p.reuse_fits,
+                ],
+                p.depth_clip,
+            ),
+            light: (light.position, light.radius),
+            transforms: lp
+                .volumes
+                .iter()
+                .map(|v| volume::group_transform(scene, groups.groups[v.group].owner))
+                .collect(),
+        }
+    }
 }
 
 struct CachedPart {
@@ -192,6 +240,11 @@ pub struct PieceChoices<'a> {
     /// `plan.reuse_depth_fits`: fits are kept for the next frame (used while its depth is the
     /// same, see [`VolumeCache::begin_frame`]).
     pub reuse_fits: bool,
+    /// `plan.reuse_volume_draws`: a light's draws are kept, and drawn again while nothing they
+    /// are made from changed.
+    pub reuse_draws: bool,
+    /// The depth read back is the last frame's (or none is read).
+    pub depth_unchanged: bool,
 }
 
 #[derive(Default)]
@@ -387,6 +440,25 @@ impl VolumeCache {
         o: &ShadowVolumeOptions,
         pieces: PieceChoices,
     ) -> Result<&LightVolumes, String> {
+        let inputs = pieces
+            .reuse_draws
+            .then(|| DrawInputs::of(scene, lp, o, &pieces));
+        let unchanged = pieces.depth_unchanged
+            && inputs.is_some()
+            && self
+                .lights
+                .get(&lp.light)
+                .is_some_and(|lv| lv.inputs == inputs);
+        if unchanged {
+            let lv = self.lights.get_mut(&lp.light).expect("checked above");
+            let s = &mut lv.stats;
+            s.parts_reused += s.parts_built;
+            s.parts_built = 0;
+            s.rebuilt = false;
+            s.build_ms = 0.0;
+            s.draws_reused = true;
+            return Ok(lv);
+        }
         let camera = pieces.camera;
         // Without receiver boxes (no caster culling) every part is built whole.
         let culling = !lp.volume_receivers.is_empty();
@@ -427,6 +499,7 @@ impl VolumeCache {
                     meshes: HashMap::new(),
                     uploaded: 0,
                     uploaded_vertices: 0,
+                    inputs: None,
                 })
             }
         };
@@ -754,6 +827,7 @@ impl VolumeCache {
             ));
         }
         lv.indices = indices;
+        lv.inputs = inputs;
         lv.draws = draws;
         lv.parts = parts;
         lv.stats = stats;
@@ -771,6 +845,7 @@ impl VolumeCache {
     }
 
     pub fn delete(&mut self, gl: &glow::Context) {
+        self.fits.clear();
         for (_, v) in self.lights.drain() {
             // SAFETY: our own objects, deleted once.
             unsafe {

@@ -519,11 +519,12 @@ fn timings(ui: &mut egui::Ui, state: &ViewerState, frame: &Frame) {
         let chunks: usize = frame.volumes.iter().map(|v| v.chunks_merged).sum();
         let left_out: usize = frame.volumes.iter().map(|v| v.triangles_clipped).sum();
         let refits: usize = frame.volumes.iter().map(|v| v.depth_fits_reused).sum();
+        let kept = frame.volumes.iter().filter(|v| v.draws_reused).count();
         ui.label(format!(
             "volumes: {quads} quads, {caps} cap triangles, {zfail} z-fail / {zpass} z-pass parts \
              ({} split, {clipped} depth-clipped, {merged} merged from {chunks} chunks), {} \
              stencil pass(es); {left_out} triangles left out wholly clipped, {refits} depth \
-             fits reused",
+             fits reused, {kept} lights' draws kept",
             p.split_parts, p.stencil_passes
         ));
     }
