@@ -292,8 +292,11 @@ pub struct Renderer {
     /// Created on the first frame that reduces its depth for the planner.
     depth_reducer: Option<DepthReducer>,
     /// The last depth read for the planner: a frame whose depth is the same keeps the fits
-    /// made for it.
+    /// and draws made for it.
     last_depth: Option<DepthPyramid>,
+    /// Advanced whenever the depth read differs from `last_depth` (see
+    /// `PieceChoices::depth_generation`).
+    depth_generation: u64,
     /// The shadow-map views of the last frame, for the depth-map debug view.
     last_maps: Vec<LastMap>,
     /// Each light's measured cost per technique, for `technique = auto`.
@@ -345,6 +348,7 @@ impl Renderer {
             empty_vao,
             depth_reducer: None,
             last_depth: None,
+            depth_generation: 0,
             last_maps: Vec::new(),
             costs: CostMemory::default(),
         })
@@ -720,6 +724,9 @@ impl Renderer {
             // The fits kept are those made for `last_depth`.
             self.volumes
                 .begin_frame(same_depth && options.plan.reuse_depth_fits);
+            if !same_depth {
+                self.depth_generation += 1;
+            }
             self.last_depth = depth;
         }
         let pieces = PieceChoices {
@@ -736,7 +743,7 @@ impl Renderer {
             cull_clipped: options.plan.enabled && options.plan.cull_clipped,
             reuse_fits: options.plan.reuse_depth_fits,
             reuse_draws: options.plan.enabled && options.plan.reuse_volume_draws,
-            depth_unchanged: !read || same_depth,
+            depth_generation: self.depth_generation,
             truncate: options.plan.enabled && options.plan.truncate_volumes,
         };
         let prepare_start = Instant::now();

@@ -166,12 +166,13 @@ pub struct LightVolumes {
     inputs: Option<DrawInputs>,
 }
 
-/// Everything a light's volume draws are made from but the depth buffer: the light's plan, the
-/// camera, the volume options and the planner's choices, the light and the casters'
-/// transforms. With the depth unchanged too, the draws are what they were.
+/// Everything a light's volume draws are made from: the light's plan, the camera, the depth
+/// read back (by its generation), the volume options and the planner's choices, the light and
+/// the casters' transforms. While all of it is the same, the draws are what they were.
 #[derive(PartialEq)]
 struct DrawInputs {
     plan: LightPlan,
+    depth: u64,
     camera: CameraSetup,
     options: ShadowVolumeOptions,
     choices: ([bool; 7], usize),
@@ -185,6 +186,7 @@ impl DrawInputs {
         let light = &scene.lights[lp.light];
         DrawInputs {
             plan: lp.clone(),
+            depth: p.depth_generation,
             camera: *p.camera,
             options: o.clone(),
             choices: (
@@ -243,8 +245,10 @@ pub struct PieceChoices<'a> {
     /// `plan.reuse_volume_draws`: a light's draws are kept, and drawn again while nothing they
     /// are made from changed.
     pub reuse_draws: bool,
-    /// The depth read back is the last frame's (or none is read).
-    pub depth_unchanged: bool,
+    /// Which depth `depth` is: a count the renderer advances whenever the depth it reads back
+    /// differs from the one it read before, so that draws made from an earlier depth are
+    /// never taken for this one's.
+    pub depth_generation: u64,
 }
 
 #[derive(Default)]
@@ -443,8 +447,7 @@ impl VolumeCache {
         let inputs = pieces
             .reuse_draws
             .then(|| DrawInputs::of(scene, lp, o, &pieces));
-        let unchanged = pieces.depth_unchanged
-            && inputs.is_some()
+        let unchanged = inputs.is_some()
             && self
                 .lights
                 .get(&lp.light)
@@ -690,7 +693,7 @@ impl VolumeCache {
             if mesh.vertices.is_empty() {
                 continue;
             }
-            let range = PartRange {
+            let mut range = PartRange {
                 group: p.group,
                 piece: p.id,
                 counting: p.counting,
@@ -724,7 +727,6 @@ impl VolumeCache {
                 },
                 elements: None,
             };
-            let mut range = range;
             let test = ClipTest::new(camera.view_proj * p.model, &range.depth_clip)
                 .filter(|_| pieces.cull_clipped && range.drawn());
             if let Some(test) = test {
