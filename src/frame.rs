@@ -58,6 +58,9 @@ pub struct Step {
 pub struct CacheStats {
     pub maps_rendered: usize,
     pub maps_reused: usize,
+    /// The planner's depth taken from the last frame, not read back: the base pass drew the
+    /// same thing (`plan.reuse_depth`).
+    pub depth_reused: bool,
     pub volume_parts_built: usize,
     pub volume_parts_reused: usize,
 }

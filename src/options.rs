@@ -616,6 +616,12 @@ define_options! {
         /// (as read back for the planner) is the same: a fit reads nothing else but its
         /// rectangle. A still camera over a still scene then fits nothing.
         reuse_depth_fits: bool = true;
+        /// Take the depth the planner reads (`occlusion`, `depth_clip`) from the last frame,
+        /// without reading it back, while everything the base pass draws it from is the same:
+        /// the camera, the surfaces in view, the models' transforms and the frame's depth
+        /// format. The readback waits for the GL to finish the base pass (on llvmpipe the
+        /// frame's one stall); a still camera over a still scene then has none.
+        reuse_depth: bool = true;
         /// Keep each light's shadow-volume draws (parts, rectangles, clip planes, index lists)
         /// and draw them again while nothing they are made from changed: the light's plan,
         /// the camera, the depth read back, the volume options, the light and the casters'

@@ -943,3 +943,49 @@ fn volume_draws_are_reused_only_while_their_inputs_stay() {
     }
     assert!(shadows > 10_000, "{shadows} shadowed pixels along the path");
 }
+
+#[test]
+fn the_depth_is_taken_from_the_last_frame_only_while_the_base_pass_draws_the_same() {
+    let (mut scene, _, options) = load_scene_file("wrackdm17");
+    let reuse = with(&options, &["technique=shadow_volume"]);
+    let fresh = with(
+        &reuse,
+        &[
+            "plan.reuse_depth=false",
+            "plan.reuse_volume_draws=false",
+            "plan.reuse_depth_fits=false",
+        ],
+    );
+    let (ctx, mut r) = gl_on(BackendChoice::Egl, &reuse);
+    let mut c = Renderer::new(ctx.gl.clone(), reuse.width, reuse.height).unwrap();
+    r.load_scene(&scene).unwrap();
+    c.load_scene(&scene).unwrap();
+    let path = camera_path(&scene.camera, 4, 48.0);
+    let step = Mat4::from_translation(Vec3::new(0.0, 40.0, 0.0));
+    let mut shadows = 0;
+    // (camera, whether the player steps before the frame, whether the depth is the last one)
+    for (i, (cam, step_first, kept)) in [
+        (&path[0], false, false),
+        (&path[0], false, true),
+        (&path[0], true, false),
+        (&path[0], false, true),
+        (&path[1], false, false),
+        (&path[1], false, true),
+    ]
+    .into_iter()
+    .enumerate()
+    {
+        if step_first {
+            let moved = scene.models[0].transform * step;
+            shadowlab::viewer::edit::move_model(&mut scene, 0, moved);
+        }
+        let a = r.render_at(&scene, cam, &reuse, masks()).unwrap();
+        let b = c.render_at(&scene, cam, &fresh, masks()).unwrap();
+        assert!(!b.cache.depth_reused);
+        assert_eq!(a.cache.depth_reused, kept, "frame {i}");
+        let differing: usize = mask_differences(&a, &b).iter().map(|d| d.1).sum();
+        assert_eq!(differing, 0, "frame {i}");
+        shadows += shadowed(&a);
+    }
+    assert!(shadows > 10_000, "{shadows} shadowed pixels along the path");
+}

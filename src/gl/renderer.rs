@@ -8,7 +8,7 @@
 
 use super::caps::{self, Caps};
 use super::debug;
-use super::depth_reduce::DepthReducer;
+use super::depth_reduce::{DepthInputs, DepthReducer};
 use super::passes::lit::{LitShadow, ShadowBinding};
 use super::passes::shadow_map::{DepthTarget, copies_from_frame, copy_depth};
 use super::passes::{self, PassContext, set_scissor};
@@ -297,6 +297,8 @@ pub struct Renderer {
     /// Advanced whenever the depth read differs from `last_depth` (see
     /// `PieceChoices::depth_generation`).
     depth_generation: u64,
+    /// What `last_depth` was drawn from (`plan.reuse_depth`).
+    depth_inputs: Option<DepthInputs>,
     /// The shadow-map views of the last frame, for the depth-map debug view.
     last_maps: Vec<LastMap>,
     /// Each light's measured cost per technique, for `technique = auto`.
@@ -349,6 +351,7 @@ impl Renderer {
             depth_reducer: None,
             last_depth: None,
             depth_generation: 0,
+            depth_inputs: None,
             last_maps: Vec::new(),
             costs: CostMemory::default(),
         })
@@ -380,6 +383,8 @@ impl Renderer {
         self.shadow_maps.forget();
         self.volumes.delete(&self.gl);
         self.costs = CostMemory::default();
+        self.last_depth = None;
+        self.depth_inputs = None;
         Ok(())
     }
 
@@ -684,7 +689,18 @@ impl Renderer {
             .iter()
             .any(|l| l.technique == Technique::ShadowVolume);
         let reads_depth = options.plan.occlusion || options.plan.depth_clip;
-        let depth = if any_volumes && options.plan.enabled && reads_depth {
+        let wants_depth = any_volumes && options.plan.enabled && reads_depth;
+        let inputs = wants_depth.then(|| DepthInputs::of(scene, plan, &self.target, options));
+        // The base pass drew what the last depth read was drawn from: it is that depth.
+        let known = options.plan.reuse_depth
+            && inputs.is_some()
+            && self.last_depth.is_some()
+            && inputs == self.depth_inputs;
+        cache.depth_reused = known;
+        if known {
+            self.timer.end(gl);
+        }
+        let depth = if wants_depth && !known {
             self.timer.end(gl);
             let t = Instant::now();
             let (w, h) = (self.target.width, self.target.height);
@@ -715,12 +731,15 @@ impl Renderer {
             None
         };
         // Frames that read no depth (other techniques) leave the last one standing.
-        let same_depth = match (&depth, &self.last_depth) {
-            (Some(new), Some(last)) => new.same_as(last),
-            _ => false,
-        };
-        let read = depth.is_some();
-        if read {
+        let same_depth = known
+            || match (&depth, &self.last_depth) {
+                (Some(new), Some(last)) => new.same_as(last),
+                _ => false,
+            };
+        let read = known || depth.is_some();
+        if known {
+            self.volumes.begin_frame(options.plan.reuse_depth_fits);
+        } else if read {
             // The fits kept are those made for `last_depth`.
             self.volumes
                 .begin_frame(same_depth && options.plan.reuse_depth_fits);
@@ -728,6 +747,7 @@ impl Renderer {
                 self.depth_generation += 1;
             }
             self.last_depth = depth;
+            self.depth_inputs = inputs;
         }
         let pieces = PieceChoices {
             camera: &plan.camera,

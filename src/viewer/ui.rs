@@ -503,8 +503,12 @@ fn timings(ui: &mut egui::Ui, state: &ViewerState, frame: &Frame) {
     ));
     let c = &frame.cache;
     ui.label(format!(
-        "cache: maps {} reused, {} drawn; volume parts {} reused, {} built",
-        c.maps_reused, c.maps_rendered, c.volume_parts_reused, c.volume_parts_built
+        "cache: maps {} reused, {} drawn; volume parts {} reused, {} built; depth {}",
+        c.maps_reused,
+        c.maps_rendered,
+        c.volume_parts_reused,
+        c.volume_parts_built,
+        if c.depth_reused { "reused" } else { "read" }
     ));
     for choice in &p.choices {
         ui.label(format!("auto: {choice}"));
