@@ -1,28 +1,10 @@
 //! What rendering one frame produces: the image, and how long each pass took.
 
+use crate::images::{GBuffer, Mask, Rgba, StencilImage};
+use crate::plan::pass::{PassId, PassTime};
 use glam::{Mat4, Vec3};
 use serde::Serialize;
 use std::path::Path;
-
-/// An RGBA8 image, top row first.
-#[derive(Debug, Clone, PartialEq)]
-pub struct Rgba {
-    pub width: u32,
-    pub height: u32,
-    pub data: Vec<u8>,
-}
-
-impl Rgba {
-    pub fn save(&self, path: &Path) -> Result<(), image::ImageError> {
-        image::save_buffer(
-            path,
-            &self.data,
-            self.width,
-            self.height,
-            image::ExtendedColorType::Rgba8,
-        )
-    }
-}
 
 /// What a step of a frame does (the walkthrough steps through them).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
@@ -65,106 +47,6 @@ pub struct CacheStats {
     pub volume_parts_reused: usize,
 }
 
-/// A light's stencil counts after its volume pass (row-major, top row first).
-#[derive(Debug, Clone, PartialEq)]
-pub struct StencilImage {
-    pub light: usize,
-    pub width: u32,
-    pub height: u32,
-    pub values: Vec<u8>,
-    /// Whether the counts wrap modulo 256 (255 is then -1), rather than saturating.
-    pub wraps: bool,
-}
-
-/// Time spent in one pass of a frame.
-#[derive(Debug, Clone, Serialize, PartialEq)]
-pub struct PassTime {
-    /// e.g. `base`, `light0.lit`.
-    pub name: String,
-    pub ms: f64,
-    /// `gpu` (GL_TIME_ELAPSED) or `cpu` (wall time around glFinish, or CPU-only work).
-    pub clock: &'static str,
-}
-
-/// One light's decision at one pixel. Stored as `u8` in masks and mask PNGs.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
-#[repr(u8)]
-pub enum MaskValue {
-    /// Background, outside the light's cone or range, facing away, or a surface that takes no
-    /// dynamic light.
-    NotReceiver = 0,
-    Lit = 1,
-    Shadowed = 2,
-}
-
-impl MaskValue {
-    pub fn from_u8(v: u8) -> MaskValue {
-        match v {
-            1 => MaskValue::Lit,
-            2 => MaskValue::Shadowed,
-            _ => MaskValue::NotReceiver,
-        }
-    }
-}
-
-/// One light's decision for every pixel (row-major, top row first; values of [`MaskValue`]).
-#[derive(Debug, Clone, PartialEq)]
-pub struct Mask {
-    pub light: usize,
-    pub width: u32,
-    pub height: u32,
-    pub values: Vec<u8>,
-}
-
-impl Mask {
-    pub fn get(&self, x: u32, y: u32) -> MaskValue {
-        MaskValue::from_u8(self.values[(y * self.width + x) as usize])
-    }
-
-    pub fn count(&self, v: MaskValue) -> usize {
-        self.values.iter().filter(|&&x| x == v as u8).count()
-    }
-
-    /// Black = not a receiver, white = lit, mid grey = shadowed.
-    pub fn save_png(&self, path: &Path) -> Result<(), image::ImageError> {
-        let grey: Vec<u8> = self
-            .values
-            .iter()
-            .map(|&v| match MaskValue::from_u8(v) {
-                MaskValue::NotReceiver => 0,
-                MaskValue::Lit => 255,
-                MaskValue::Shadowed => 96,
-            })
-            .collect();
-        image::save_buffer(
-            path,
-            &grey,
-            self.width,
-            self.height,
-            image::ExtendedColorType::L8,
-        )
-    }
-}
-
-/// What the camera sees at each pixel, read back from a G-buffer pass (row-major, top row first).
-#[derive(Debug, Clone, PartialEq)]
-pub struct GBuffer {
-    pub width: u32,
-    pub height: u32,
-    /// World position of the visible surface.
-    pub position: Vec<[f32; 3]>,
-    /// Shading normal, facing the camera on two-sided surfaces.
-    pub normal: Vec<[f32; 3]>,
-    /// Per pixel: 0 background, 1 a surface that receives dynamic light, 2 one that does not.
-    pub kind: Vec<u8>,
-}
-
-impl GBuffer {
-    pub fn is_receiver_surface(&self, i: usize) -> bool {
-        self.kind[i] == 1
-    }
-}
-
 #[derive(Debug, Clone)]
 pub struct Frame {
     pub width: u32,
@@ -181,7 +63,7 @@ pub struct Frame {
     /// Each planned light's decision per pixel (when masks were requested).
     pub masks: Vec<Mask>,
     /// Shadow-volume work per light (shadow volumes only).
-    pub volumes: Vec<crate::gl::volumes::VolumeStats>,
+    pub volumes: Vec<crate::plan::volume_draws::VolumeStats>,
     /// The steps executed, in order (all of them unless the request stopped early).
     pub steps: Vec<Step>,
     /// The buffer the last step wrote, as an image, when the request stopped after a step.
@@ -238,8 +120,8 @@ impl Frame {
         )
     }
 
-    /// Milliseconds of the named pass, if it ran.
-    pub fn pass_ms(&self, name: &str) -> Option<f64> {
-        self.passes.iter().find(|p| p.name == name).map(|p| p.ms)
+    /// Milliseconds of the pass, if it ran.
+    pub fn pass_ms(&self, pass: PassId) -> Option<f64> {
+        self.passes.iter().find(|p| p.pass == pass).map(|p| p.ms)
     }
 }

@@ -6,7 +6,9 @@
 //! → reports.
 
 pub mod frame;
+pub mod geometry;
 pub mod gl;
+pub mod images;
 pub mod options;
 pub mod plan;
 pub mod q3;

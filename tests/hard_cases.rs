@@ -10,11 +10,11 @@ mod common;
 
 use common::{Measured, Measurer, load_asset, load_scene_file, options_with};
 use glam::Vec3;
-use shadowlab::frame::{Mask, MaskValue};
+use shadowlab::images::{Mask, MaskValue};
 use shadowlab::options::Options;
 use shadowlab::plan::Plan;
 use shadowlab::scene::{Camera, Scene};
-use shadowlab::shadow::volume::{self, VolumeSettings};
+use shadowlab::shadow::volume::{self, CasterGroups, VolumeSettings};
 use shadowlab::truth::{self, Reference, Tracing};
 
 const SM: &str = "technique=shadow_map";
@@ -54,7 +54,7 @@ fn check_cpu(case: &str, scene: &Scene) {
             }
         }
     }
-    let groups = scene.caster_groups();
+    let groups = CasterGroups::build(scene);
     let s = VolumeSettings {
         rule: shadowlab::options::EdgeRule::Paper,
         extrusion: shadowlab::options::Extrusion::Infinite,
@@ -247,10 +247,12 @@ fn case04_quake3_scale() {
 fn case05_non_manifold_and_open_geometry() {
     let case = "5 non-manifold";
     let scene = hard("non_manifold");
-    let edges = scene.caster_groups().groups[0].connectivity.counts();
+    let edges = CasterGroups::build(&scene).groups[0].connectivity.counts();
     println!(
         "{case}: edges {edges:?}, degenerate triangles {}",
-        scene.caster_groups().groups[0].connectivity.degenerate
+        CasterGroups::build(&scene).groups[0]
+            .connectivity
+            .degenerate
     );
     assert!(edges.non_manifold >= 1 && edges.open >= 8);
     check_cpu(case, &scene);

@@ -4,8 +4,8 @@ mod common;
 
 use common::{floor_quad, gl_on, scene_of};
 use glam::Vec3;
-use shadowlab::frame::MaskValue;
 use shadowlab::gl::FrameRequest;
+use shadowlab::images::MaskValue;
 use shadowlab::options::{BackendChoice, Options};
 use shadowlab::scene::{Camera, Cull, Light, Material, builtin};
 use shadowlab::truth::{self, Reference, Tracing};

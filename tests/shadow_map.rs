@@ -4,7 +4,8 @@
 mod common;
 
 use common::{Measurer, load_scene_file, options_with};
-use shadowlab::frame::MaskValue;
+use shadowlab::images::MaskValue;
+use shadowlab::plan::pass::{PassId, Stage};
 use shadowlab::scene::builtin;
 
 const SM: &str = "technique=shadow_map";
@@ -83,8 +84,16 @@ fn copy_and_fbo_paths_give_identical_masks() {
         assert_eq!(copy.mask(l), fbo.mask(l), "light {l}");
     }
     // The copy path times a depth_copy pass per view; the FBO path has none.
-    assert!(copy.frame.pass_ms("light0.depth_copy").is_some());
-    assert!(fbo.frame.pass_ms("light0.depth_copy").is_none());
+    assert!(
+        copy.frame
+            .pass_ms(PassId::light(0, Stage::DepthCopy))
+            .is_some()
+    );
+    assert!(
+        fbo.frame
+            .pass_ms(PassId::light(0, Stage::DepthCopy))
+            .is_none()
+    );
 }
 
 #[test]
@@ -220,7 +229,7 @@ fn outside_the_fov_clamp_shows_the_artifact_range_and_clip_planes_remove_it() {
         "{} pixels outside the narrow frustum",
         outside.len()
     );
-    let false_shadow = |mask: &shadowlab::frame::Mask| {
+    let false_shadow = |mask: &shadowlab::images::Mask| {
         outside
             .iter()
             .filter(|&&i| {
@@ -229,7 +238,7 @@ fn outside_the_fov_clamp_shows_the_artifact_range_and_clip_planes_remove_it() {
             })
             .count()
     };
-    let decided = |mask: &shadowlab::frame::Mask| {
+    let decided = |mask: &shadowlab::images::Mask| {
         outside
             .iter()
             .filter(|&&i| mask.values[i] != MaskValue::NotReceiver as u8)

@@ -5,9 +5,10 @@ mod common;
 
 use common::{Measurer, floor_quad, load_scene_file, options_with, scene_of};
 use glam::Vec3;
-use shadowlab::frame::Mask;
+use shadowlab::images::Mask;
 use shadowlab::scene::shapes::{MeshData, cuboid};
 use shadowlab::scene::{Camera, Cull, Light, Material, Scene, builtin};
+use shadowlab::shadow::volume::CasterGroups;
 use shadowlab::truth::{self, Reference, Tracing};
 
 const SV: &str = "technique=shadow_volume";
@@ -190,7 +191,7 @@ fn open_and_three_triangle_edges_need_the_papers_rule() {
         vec![Light::omni("above", Vec3::new(15.0, 10.0, 400.0), 3000.0)],
         Camera::looking_at(Vec3::new(0.0, -300.0, 260.0), Vec3::ZERO),
     );
-    let groups = scene.caster_groups();
+    let groups = CasterGroups::build(&scene);
     let edges = groups.groups[0].connectivity.counts();
     assert!(edges.open >= 4 && edges.non_manifold >= 1, "{edges:?}");
     let mut m = Measurer::new(scene, &options_with(&[SV]));
@@ -256,7 +257,7 @@ fn more_than_255_overlapping_volumes_break_saturating_counts_only() {
             continue;
         }
         let n = inside(p);
-        let lit = |mask: &Mask| mask.values[i] == shadowlab::frame::MaskValue::Lit as u8;
+        let lit = |mask: &Mask| mask.values[i] == shadowlab::images::MaskValue::Lit as u8;
         // Far-side rim points near y = 0: their view rays pass x = 0 within |y| < 18, inside
         // even the smallest volume, so they cross all 300.
         if (1..=40).contains(&n) && p.x > 0.0 && p.y.abs() < 25.0 {

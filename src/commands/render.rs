@@ -215,10 +215,7 @@ pub fn run(common: &CommonArgs, args: &Args) -> Result<()> {
     // Per-light passes are summed so that 64 lights still give one readable line.
     let mut totals: Vec<(String, f64, usize)> = Vec::new();
     for p in &frame.passes {
-        let stage = match p.name.split_once('.') {
-            Some((light, stage)) if light.starts_with("light") => format!("lights.{stage}"),
-            _ => p.name.clone(),
-        };
+        let stage = p.pass.summed_name();
         match totals.iter_mut().find(|(n, _, _)| *n == stage) {
             Some(t) => {
                 t.1 += p.ms;

@@ -2,7 +2,7 @@
 //! or a shadow map) as grey, stencil counts as a heat map.
 
 use super::target::{flip_rows, read_pixels, read_pixels_bottom_up};
-use crate::frame::Rgba;
+use crate::images::Rgba;
 use glow::HasContext;
 
 /// The depth values of a framebuffer's `w`×`h` corner in GL's row order (bottom row first),

@@ -3,41 +3,13 @@
 //! shader. The shader runs on the GL's own threads and the CPU then converts and copies a
 //! sixteenth of the pixels; the planner reads no level finer than 2 for the rectangles and boxes
 //! it judges but the smallest, and those get a bound a few pixels wider. Not read at all while
-//! the base pass draws what it drew last frame ([`DepthInputs`], `plan.reuse_depth`).
+//! the base pass draws what it drew last frame (the planner's `DepthNeed::Reuse`,
+//! `plan.reuse_depth`).
 
 use super::program::Program;
 use super::target::{Framebuffer, framebuffer_of, read_pixels_bottom_up, texture_2d};
-use crate::options::Options;
 use crate::plan::occlusion::DepthPyramid;
-use crate::plan::{CameraSetup, Plan};
-use crate::scene::Scene;
 use glow::HasContext;
-
-/// Everything the base pass's depth is drawn from, so that a frame with the same as the last
-/// one has the same depth without reading it back (`plan.reuse_depth`): the camera (view,
-/// projection, size), which surfaces are drawn, where the models stand, the depth format and
-/// the form it is read in. Materials, textures and geometry are the loaded scene's, which
-/// `Renderer::load_scene` replaces together with the depth kept.
-#[derive(Debug, Clone, PartialEq)]
-pub struct DepthInputs {
-    camera: CameraSetup,
-    visible: Vec<bool>,
-    models: Vec<glam::Mat4>,
-    float_depth: bool,
-    reduced: bool,
-}
-
-impl DepthInputs {
-    pub fn of(scene: &Scene, plan: &Plan, target: &Framebuffer, options: &Options) -> Self {
-        DepthInputs {
-            camera: plan.camera,
-            visible: plan.visible.clone(),
-            models: scene.models.iter().map(|m| m.transform).collect(),
-            float_depth: target.float_depth,
-            reduced: options.plan.reduce_depth,
-        }
-    }
-}
 
 /// The pyramid level the shader computes: blocks of 2^2×2^2 pixels.
 pub const LEVEL: usize = 2;

@@ -8,7 +8,7 @@
 
 use super::caps::{self, Caps};
 use super::debug;
-use super::depth_reduce::{DepthInputs, DepthReducer};
+use super::depth_reduce::DepthReducer;
 use super::passes::lit::{LitShadow, ShadowBinding};
 use super::passes::shadow_map::{DepthTarget, copies_from_frame, copy_depth};
 use super::passes::{self, PassContext, set_scissor};
@@ -17,22 +17,27 @@ use super::shadow_maps::ShadowMaps;
 use super::target::{Framebuffer, GBufferTarget, MaskTarget};
 use super::timing::PassTimer;
 use super::upload::GpuScene;
-use super::volumes::{PieceChoices, VolumeCache, VolumeStats};
+use super::volumes::{LightVolumes, VolumeBuffers};
 use crate::frame::CacheStats;
-use crate::frame::{Frame, GBuffer, Mask, Rgba, StencilImage, Step, StepKind};
+use crate::frame::{Frame, Step, StepKind};
+use crate::geometry::projection::cube_face_view;
+use crate::images::{GBuffer, Mask, Rgba, StencilImage};
 use crate::options::{
     Compare, CompareResult, DepthBits, Filter, Options, Outside, StencilPasses, StencilWrap,
     Technique, VolumeShading,
 };
 use crate::plan::auto::CostMemory;
 use crate::plan::occlusion::DepthPyramid;
+use crate::plan::pass::{PassId, Stage};
+use crate::plan::planner::{DepthNeed, Planner};
 use crate::plan::scissor::Scissor;
+use crate::plan::volume_draws::VolumeStats;
 use crate::plan::{LightPlan, Plan};
 use crate::scene::{Camera, Scene};
-use crate::shadow::projection::cube_face_view;
 use crate::shadow::views::ViewKind;
 use glow::HasContext;
 use std::collections::HashMap;
+use std::ops::ControlFlow;
 use std::sync::Arc;
 use std::time::Instant;
 use thiserror::Error;
@@ -47,6 +52,8 @@ pub enum RenderError {
     NoScene,
     #[error("{0}")]
     Unsupported(String),
+    #[error(transparent)]
+    VolumeDraws(#[from] crate::plan::volume_draws::VolumeDrawError),
 }
 
 /// What a frame should produce besides its image and timings.
@@ -284,25 +291,19 @@ pub struct Renderer {
     gpu: Option<GpuScene>,
     timer: PassTimer,
     shadow_maps: ShadowMaps,
-    volumes: VolumeCache,
+    /// Every light's shadow-volume buffers.
+    volume_buffers: VolumeBuffers,
     /// Created on the first frame that asks for masks.
     measure_targets: Option<(GBufferTarget, MaskTarget)>,
     /// Core profile draws need a bound VAO even without attributes (full-screen triangles).
     empty_vao: glow::VertexArray,
     /// Created on the first frame that reduces its depth for the planner.
     depth_reducer: Option<DepthReducer>,
-    /// The last depth read for the planner: a frame whose depth is the same keeps the fits
-    /// and draws made for it.
-    last_depth: Option<DepthPyramid>,
-    /// Advanced whenever the depth read differs from `last_depth` (see
-    /// `PieceChoices::depth_generation`).
-    depth_generation: u64,
-    /// What `last_depth` was drawn from (`plan.reuse_depth`).
-    depth_inputs: Option<DepthInputs>,
     /// The shadow-map views of the last frame, for the depth-map debug view.
     last_maps: Vec<LastMap>,
-    /// Each light's measured cost per technique, for `technique = auto`.
-    costs: CostMemory,
+    /// The planner and what it keeps across frames (costs for `auto`, caster groups, the
+    /// depth it read, volume draws).
+    planner: Planner,
 }
 
 /// One shadow-mapped view's texture, by light plan and view index.
@@ -345,15 +346,12 @@ impl Renderer {
             gpu: None,
             timer,
             shadow_maps: ShadowMaps::default(),
-            volumes: VolumeCache::default(),
+            volume_buffers: VolumeBuffers::default(),
             measure_targets: None,
             empty_vao,
             depth_reducer: None,
-            last_depth: None,
-            depth_generation: 0,
-            depth_inputs: None,
             last_maps: Vec::new(),
-            costs: CostMemory::default(),
+            planner: Planner::default(),
         })
     }
 
@@ -381,10 +379,8 @@ impl Renderer {
         self.gpu = Some(gpu);
         // Cached maps and volumes belong to the old scene.
         self.shadow_maps.forget();
-        self.volumes.delete(&self.gl);
-        self.costs = CostMemory::default();
-        self.last_depth = None;
-        self.depth_inputs = None;
+        self.volume_buffers.delete(&self.gl);
+        self.planner.forget();
         Ok(())
     }
 
@@ -438,21 +434,19 @@ impl Renderer {
         options: &Options,
         request: FrameRequest,
     ) -> Result<Frame, RenderError> {
-        let plan = Plan::build_with(scene, camera, options, &self.costs);
+        let plan = self.planner.plan(scene, camera, options);
         let frame_only = request.frame_only;
         let frame = self.execute(scene, &plan, options, request)?;
         // Frame-only timing has no per-light passes to learn from.
         if !frame_only {
-            let ran: Vec<(usize, Technique)> =
-                plan.lights.iter().map(|l| (l.light, l.technique)).collect();
-            self.costs.record(&frame.passes, &ran);
+            self.planner.record_costs(&plan, &frame.passes);
         }
         Ok(frame)
     }
 
     /// What `technique = auto` has measured so far.
     pub fn costs(&self) -> &CostMemory {
-        &self.costs
+        self.planner.costs()
     }
 
     fn check_support(&self, options: &Options, plan: &Plan) -> Result<(), RenderError> {
@@ -500,12 +494,57 @@ impl Renderer {
         request: FrameRequest,
     ) -> Result<Frame, RenderError> {
         self.check_support(options, plan)?;
+        let copy = self.prepare_targets(plan, options, request)?;
+        let gl_arc = self.gl.clone();
+        let gl: &glow::Context = &gl_arc;
+        // Compile what this frame needs before borrowing the programs for the passes.
+        let variants = self.lit_variants(gl, plan, options, request)?;
+        let gpu = self.gpu.as_ref().ok_or(RenderError::NoScene)?;
+        self.timer.start_frame(!request.frame_only);
+        self.last_maps.clear();
+        passes::reset_state(gl);
+        let run = FrameRun {
+            ctx: PassContext {
+                gl,
+                scene,
+                gpu,
+                plan,
+                options,
+            },
+            programs: &self.programs,
+            variants,
+            target: &self.target,
+            measure_targets: self.measure_targets.as_ref(),
+            timer: &mut self.timer,
+            shadow_maps: &mut self.shadow_maps,
+            planner: &mut self.planner,
+            volume_buffers: &mut self.volume_buffers,
+            depth_reducer: &mut self.depth_reducer,
+            last_maps: &mut self.last_maps,
+            empty_vao: self.empty_vao,
+            request,
+            copy,
+            stepper: Stepper {
+                stop: request.stop_after,
+                steps: Vec::new(),
+            },
+            cache: CacheStats::default(),
+            start: Instant::now(),
+            volume_stats: Vec::new(),
+        };
+        run.run()
+    }
+
+    /// Sizes the frame (with room for a shadow map copied from it) and makes the measurement
+    /// targets when masks are asked for; returns whether shadow maps are copied from the frame.
+    fn prepare_targets(
+        &mut self,
+        plan: &Plan,
+        options: &Options,
+        request: FrameRequest,
+    ) -> Result<bool, RenderError> {
         let sm = &options.shadow_map;
-        let shadow_mapped = plan
-            .lights
-            .iter()
-            .any(|l| l.technique == Technique::ShadowMap);
-        let copy = shadow_mapped && copies_from_frame(sm);
+        let copy = plan.any(Technique::ShadowMap) && copies_from_frame(sm);
         let alloc = if copy { (sm.size, sm.size) } else { (0, 0) };
         self.ensure_target(
             plan.camera.width,
@@ -519,10 +558,19 @@ impl Renderer {
             let m = MaskTarget::new(&self.gl, &self.target).map_err(RenderError::Gl)?;
             self.measure_targets = Some((g, m));
         }
-        // Compile what this frame needs before borrowing the programs for the passes.
-        let gl_arc = self.gl.clone();
-        let gl: &glow::Context = &gl_arc;
-        let mut variants: HashMap<LitVariant, String> = HashMap::new();
+        Ok(copy)
+    }
+
+    /// The lit programs this frame may use, compiled on first use, by variant.
+    fn lit_variants(
+        &mut self,
+        gl: &glow::Context,
+        plan: &Plan,
+        options: &Options,
+        request: FrameRequest,
+    ) -> Result<HashMap<LitVariant, String>, RenderError> {
+        let shadow_mapped = plan.any(Technique::ShadowMap);
+        let mut variants = HashMap::new();
         for (shadow_map, cube, six) in [
             (false, false, false),
             (true, false, false),
@@ -544,500 +592,7 @@ impl Renderer {
                 variants.insert(v, key);
             }
         }
-
-        self.timer.start_frame(!request.frame_only);
-        let start = Instant::now();
-        let mut cache = CacheStats::default();
-        let mut stepper = Stepper {
-            stop: request.stop_after,
-            steps: Vec::new(),
-        };
-        // Whoever drew last (a UI painter in the viewer) may have left state the passes do not
-        // set themselves.
-        // SAFETY: fixed-function state only.
-        unsafe {
-            gl.disable(glow::SCISSOR_TEST);
-            gl.disable(glow::BLEND);
-            gl.disable(glow::STENCIL_TEST);
-            gl.disable(glow::FRAMEBUFFER_SRGB);
-            gl.color_mask(true, true, true, true);
-            gl.depth_mask(true);
-            gl.pixel_store_i32(glow::UNPACK_ALIGNMENT, 4);
-        }
-        self.last_maps.clear();
-        if self.gpu.is_none() {
-            return Err(RenderError::NoScene);
-        }
-        let gpu = self.gpu.as_ref().ok_or(RenderError::NoScene)?;
-        let ctx = PassContext {
-            gl,
-            scene,
-            gpu,
-            plan,
-            options,
-        };
-
-        // Shadow maps of every shadow-mapped light first (paper 3.1).
-        let mut maps: Vec<ViewMap> = Vec::new();
-        let fbo = if shadow_mapped && !copy {
-            Some(self.shadow_maps.fbo(gl).map_err(RenderError::Gl)?)
-        } else {
-            None
-        };
-        for (pi, lp) in plan.lights.iter().enumerate() {
-            if lp.technique != Technique::ShadowMap {
-                continue;
-            }
-            for (vi, view) in lp.views.iter().enumerate() {
-                let cube = view.kind == ViewKind::Cube;
-                let (texture, holds) = self
-                    .shadow_maps
-                    .slot(gl, lp.light, vi, cube, sm.size, sm.depth_bits)
-                    .map_err(RenderError::Gl)?;
-                let key = lp.view_keys.get(vi).copied().flatten();
-                let casters = lp.view_casters.get(vi).map(Vec::as_slice);
-                let faces: Vec<(Option<usize>, glam::Mat4)> = if cube {
-                    let eye = scene.lights[lp.light].position;
-                    (0..6)
-                        .map(|f| (Some(f), view.projection * cube_face_view(eye, f)))
-                        .collect()
-                } else {
-                    vec![(None, view.view_proj())]
-                };
-                if key.is_some() && holds == key {
-                    cache.maps_reused += 1;
-                } else {
-                    cache.maps_rendered += 1;
-                }
-                let faces = if key.is_some() && holds == key {
-                    Vec::new()
-                } else {
-                    faces
-                };
-                for (face, view_proj) in faces {
-                    let shown = face.or(Some(vi));
-                    let target = match fbo {
-                        Some(fbo) => DepthTarget::Fbo { fbo, texture },
-                        None => DepthTarget::Copy {
-                            frame: &self.target,
-                            texture,
-                        },
-                    };
-                    self.timer
-                        .begin(gl, format!("light{}.shadow_map", lp.light));
-                    passes::shadow_map::render(
-                        &ctx,
-                        &self.programs.depth,
-                        &passes::shadow_map::MapView {
-                            view_proj,
-                            size: sm.size,
-                            cube_face: face,
-                            order: lp.order,
-                            casters,
-                        },
-                        &target,
-                    );
-                    if stepper.record(StepKind::LightView, Some(lp), shown) {
-                        let depth = if copy {
-                            debug::read_depth(gl, self.target.fbo, sm.size, sm.size)
-                        } else {
-                            debug::read_depth_texture(gl, texture, face, sm.size)
-                        };
-                        let image = debug::depth_image(&depth, sm.size, sm.size);
-                        return self.stopped(gl, plan, stepper, image, Vec::new(), start);
-                    }
-                    if copy {
-                        self.timer
-                            .begin(gl, format!("light{}.depth_copy", lp.light));
-                        copy_depth(gl, &self.target, texture, sm.size, face);
-                        if stepper.record(StepKind::DepthCopy, Some(lp), shown) {
-                            let depth = debug::read_depth_texture(gl, texture, face, sm.size);
-                            let image = debug::depth_image(&depth, sm.size, sm.size);
-                            return self.stopped(gl, plan, stepper, image, Vec::new(), start);
-                        }
-                    }
-                }
-                self.shadow_maps.set_content(lp.light, vi, key);
-                ShadowMaps::configure(gl, texture, cube, sm.compare, sm.filter);
-                self.last_maps.push(LastMap {
-                    light: lp.light,
-                    view: vi,
-                    texture,
-                    cube,
-                    size: sm.size,
-                });
-                maps.push(ViewMap {
-                    plan_index: pi,
-                    view_index: vi,
-                    texture,
-                });
-            }
-        }
-
-        self.timer.begin(gl, "base");
-        self.target.bind(gl);
-        passes::base::draw(&ctx, &self.programs.unlit);
-        if stepper.record(StepKind::Base, None, None) {
-            let image = self.color_image(gl);
-            return self.stopped(gl, plan, stepper, image, Vec::new(), start);
-        }
-        // Shadow volumes: built on the CPU (or reused) once the base pass has laid down the
-        // depth that `plan.occlusion` judges receivers by.
-        let mut volume_stats: Vec<VolumeStats> = Vec::new();
-        let any_volumes = plan
-            .lights
-            .iter()
-            .any(|l| l.technique == Technique::ShadowVolume);
-        let reads_depth = options.plan.occlusion || options.plan.depth_clip;
-        let wants_depth = any_volumes && options.plan.enabled && reads_depth;
-        let inputs = wants_depth.then(|| DepthInputs::of(scene, plan, &self.target, options));
-        // The base pass drew what the last depth read was drawn from: it is that depth.
-        let known = options.plan.reuse_depth
-            && inputs.is_some()
-            && self.last_depth.is_some()
-            && inputs == self.depth_inputs;
-        cache.depth_reused = known;
-        if known {
-            self.timer.end(gl);
-        }
-        let depth = if wants_depth && !known {
-            self.timer.end(gl);
-            let t = Instant::now();
-            let (w, h) = (self.target.width, self.target.height);
-            let pyramid = if options.plan.reduce_depth {
-                if !self.depth_reducer.as_ref().is_some_and(|r| r.fits(w, h)) {
-                    if let Some(old) = self.depth_reducer.take() {
-                        old.delete(gl);
-                    }
-                    let r = DepthReducer::new(gl, w, h).map_err(RenderError::Gl)?;
-                    self.depth_reducer = Some(r);
-                }
-                let reducer = self.depth_reducer.as_ref().expect("created above");
-                reducer.read(
-                    gl,
-                    &self.programs.depth_reduce,
-                    self.empty_vao,
-                    &self.target,
-                )
-            } else {
-                let values = debug::read_depth_bottom_up(gl, self.target.fbo, w, h);
-                DepthPyramid::from_bottom_up(values, w as usize, h as usize)
-            };
-            self.timer
-                .record_cpu("occlusion", t.elapsed().as_secs_f64() * 1e3);
-            self.target.bind(gl);
-            pyramid
-        } else {
-            None
-        };
-        // Frames that read no depth (other techniques) leave the last one standing.
-        let same_depth = known
-            || match (&depth, &self.last_depth) {
-                (Some(new), Some(last)) => new.same_as(last),
-                _ => false,
-            };
-        let read = known || depth.is_some();
-        if known {
-            self.volumes.begin_frame(options.plan.reuse_depth_fits);
-        } else if read {
-            // The fits kept are those made for `last_depth`.
-            self.volumes
-                .begin_frame(same_depth && options.plan.reuse_depth_fits);
-            if !same_depth {
-                self.depth_generation += 1;
-            }
-            self.last_depth = depth;
-            self.depth_inputs = inputs;
-        }
-        let pieces = PieceChoices {
-            camera: &plan.camera,
-            depth: self.last_depth.as_ref().filter(|_| read),
-            occlusion: options.plan.occlusion,
-            depth_clip: if options.plan.depth_clip {
-                options.plan.depth_clip_planes as usize
-            } else {
-                0
-            },
-            scissor: options.plan.enabled && options.plan.piece_scissor,
-            merge: options.plan.enabled && options.plan.merge_pieces,
-            cull_clipped: options.plan.enabled && options.plan.cull_clipped,
-            reuse_fits: options.plan.reuse_depth_fits,
-            reuse_draws: options.plan.enabled && options.plan.reuse_volume_draws,
-            depth_generation: self.depth_generation,
-            truncate: options.plan.enabled && options.plan.truncate_volumes,
-        };
-        let prepare_start = Instant::now();
-        let mut builds_ms = 0.0;
-        for lp in plan
-            .lights
-            .iter()
-            .filter(|l| l.technique == Technique::ShadowVolume)
-        {
-            let v = self
-                .volumes
-                .prepare(gl, scene, lp, &options.shadow_volume, pieces)
-                .map_err(RenderError::Gl)?;
-            let build_ms = if v.stats.rebuilt {
-                v.stats.build_ms
-            } else {
-                0.0
-            };
-            self.timer
-                .record_cpu(format!("light{}.volume_build", lp.light), build_ms);
-            builds_ms += build_ms;
-            cache.volume_parts_built += v.stats.parts_built;
-            cache.volume_parts_reused += v.stats.parts_reused;
-            volume_stats.push(v.stats);
-        }
-        if any_volumes {
-            // The per-frame decisions on the pieces (receivers, rectangles, merges, depth
-            // clips) and the uploads, less the builds timed above.
-            let ms = prepare_start.elapsed().as_secs_f64() * 1e3 - builds_ms;
-            self.timer.record_cpu("volume_pieces", ms.max(0.0));
-        }
-
-        let mut stencil_image = None;
-        let lit_program = |shadow_map: bool, cube: bool, six: bool, mask: bool| {
-            &self.programs.lit[&variants[&LitVariant {
-                shadow_map,
-                cube,
-                six,
-                mask,
-            }]]
-        };
-        let bindings = |pi: usize| -> Vec<(bool, ShadowBinding, &[u32], Option<Scissor>)> {
-            let lp = &plan.lights[pi];
-            maps.iter()
-                .filter(|m| m.plan_index == pi)
-                .map(|m| {
-                    let view = &lp.views[m.view_index];
-                    let receivers = lp
-                        .view_receivers
-                        .get(m.view_index)
-                        .map_or(lp.receivers.as_slice(), Vec::as_slice);
-                    let rect = lp.view_scissors.get(m.view_index).copied().flatten();
-                    (
-                        view.kind == ViewKind::Cube,
-                        ShadowBinding {
-                            view,
-                            texture: m.texture,
-                        },
-                        receivers,
-                        rect.or(lp.scissor),
-                    )
-                })
-                .collect()
-        };
-        let fill = options.shadow_volume.shading == VolumeShading::Fill;
-        for (pi, lp) in plan.lights.iter().enumerate() {
-            set_scissor(gl, lp.scissor);
-            match (lp.technique, self.volumes.get(lp.light)) {
-                (Technique::ShadowVolume, Some(v)) => {
-                    self.timer.begin(gl, format!("light{}.stencil", lp.light));
-                    passes::stencil::draw(&ctx, &self.programs.volume, v, lp.scissor);
-                    let wants_stencil = request.stencil_of == Some(lp.light);
-                    let stop = stepper.record(StepKind::Stencil, Some(lp), None);
-                    if wants_stencil || stop {
-                        let (w, h) = (self.target.width, self.target.height);
-                        let values = debug::read_stencil(gl, self.target.fbo, w, h);
-                        self.target.bind(gl);
-                        let wraps = options.shadow_volume.wrap == StencilWrap::Wrap
-                            || plan.stencil == StencilPasses::Separate;
-                        if stop {
-                            let image = debug::stencil_image(&values, w, h, wraps);
-                            return self.stopped(gl, plan, stepper, image, volume_stats, start);
-                        }
-                        stencil_image = Some(StencilImage {
-                            light: lp.light,
-                            width: w,
-                            height: h,
-                            values,
-                            wraps,
-                        });
-                    }
-                    self.timer.begin(gl, format!("light{}.lit", lp.light));
-                    passes::lit::draw(
-                        &ctx,
-                        lit_program(false, false, false, false),
-                        lp,
-                        &LitShadow::Stencil { test: !fill },
-                        &lp.receivers,
-                    );
-                    if stepper.record(StepKind::Lit, Some(lp), None) {
-                        let image = self.color_image(gl);
-                        return self.stopped(gl, plan, stepper, image, volume_stats, start);
-                    }
-                    if fill {
-                        self.timer.begin(gl, format!("light{}.fill", lp.light));
-                        passes::stencil::fill(gl, &self.programs.fill, self.empty_vao, FILL_SHADE);
-                        if stepper.record(StepKind::Fill, Some(lp), None) {
-                            let image = self.color_image(gl);
-                            return self.stopped(gl, plan, stepper, image, volume_stats, start);
-                        }
-                    }
-                }
-                _ => {
-                    self.timer.begin(gl, format!("light{}.lit", lp.light));
-                    draw_maps(
-                        &ctx,
-                        lp,
-                        &bindings(pi),
-                        |sm, cube, six| lit_program(sm, cube, six, false),
-                        false,
-                    );
-                    if stepper.record(StepKind::Lit, Some(lp), None) {
-                        let image = self.color_image(gl);
-                        return self.stopped(gl, plan, stepper, image, volume_stats, start);
-                    }
-                }
-            }
-        }
-        set_scissor(gl, None);
-        let passes = self.timer.finish(gl);
-        // SAFETY: waits for the frame; no state change.
-        unsafe { gl.finish() };
-        let frame_ms = start.elapsed().as_secs_f64() * 1e3;
-        if request.overlays.volumes || request.overlays.silhouettes {
-            self.target.bind(gl);
-            let shown = plan
-                .lights
-                .iter()
-                .filter(|lp| request.overlays.light.is_none_or(|l| l == lp.light));
-            for lp in shown {
-                if let (Technique::ShadowVolume, Some(v)) =
-                    (lp.technique, self.volumes.get(lp.light))
-                {
-                    passes::debug::volumes(
-                        &ctx,
-                        &self.programs.debug_volume,
-                        v,
-                        request.overlays.volumes,
-                        request.overlays.silhouettes,
-                    );
-                }
-            }
-        }
-        // SAFETY: error query only.
-        let error = unsafe { gl.get_error() };
-        if error != glow::NO_ERROR {
-            return Err(RenderError::Gl(format!(
-                "the frame raised GL error 0x{error:x}"
-            )));
-        }
-        let rgba = self.target.read_rgba(gl);
-        let (gbuffer, masks) = match (&self.measure_targets, request.masks) {
-            (Some((gtarget, mtarget)), true) => {
-                gtarget_bind(gl, gtarget);
-                passes::gbuffer::draw(&ctx, &self.programs.gbuffer);
-                let gbuffer = read_gbuffer(gl, gtarget);
-                let mut masks = Vec::with_capacity(plan.lights.len() + plan.culled.len());
-                for (pi, lp) in plan.lights.iter().enumerate() {
-                    mtarget.bind(gl);
-                    set_scissor(gl, None);
-                    // SAFETY: clears the mask to "not a receiver"; depth and stencil untouched.
-                    unsafe {
-                        gl.color_mask(true, true, true, true);
-                        gl.clear_color(0.0, 0.0, 0.0, 0.0);
-                        gl.clear(glow::COLOR_BUFFER_BIT);
-                    }
-                    set_scissor(gl, lp.scissor);
-                    match (lp.technique, self.volumes.get(lp.light)) {
-                        (Technique::ShadowVolume, Some(v)) => {
-                            passes::stencil::draw(&ctx, &self.programs.volume, v, lp.scissor);
-                            passes::lit::draw_mask(
-                                &ctx,
-                                lit_program(false, false, false, true),
-                                lp,
-                                &LitShadow::Stencil { test: true },
-                                &lp.receivers,
-                            );
-                        }
-                        _ => draw_maps(
-                            &ctx,
-                            lp,
-                            &bindings(pi),
-                            |sm, cube, six| lit_program(sm, cube, six, true),
-                            true,
-                        ),
-                    }
-                    set_scissor(gl, None);
-                    masks.push(Mask {
-                        light: lp.light,
-                        width: mtarget.width,
-                        height: mtarget.height,
-                        values: mtarget.read(gl),
-                    });
-                }
-                // Culled lights reach no pixel in view.
-                for &light in &plan.culled {
-                    masks.push(Mask {
-                        light,
-                        width: mtarget.width,
-                        height: mtarget.height,
-                        values: vec![0; (mtarget.width * mtarget.height) as usize],
-                    });
-                }
-                masks.sort_by_key(|m| m.light);
-                (Some(gbuffer), masks)
-            }
-            _ => (None, Vec::new()),
-        };
-        Ok(Frame {
-            width: self.target.width,
-            height: self.target.height,
-            rgba,
-            view_proj: plan.camera.view_proj,
-            passes,
-            frame_ms,
-            gbuffer,
-            masks,
-            volumes: volume_stats,
-            steps: stepper.steps,
-            step_image: None,
-            stencil: stencil_image,
-            plan_stats: plan.stats.clone(),
-            cache,
-        })
-    }
-
-    /// The frame's colour buffer as an image.
-    fn color_image(&self, gl: &glow::Context) -> Rgba {
-        Rgba {
-            width: self.target.width,
-            height: self.target.height,
-            data: self.target.read_rgba(gl),
-        }
-    }
-
-    /// The frame as it stands after a walkthrough step, with that step's buffer as an image.
-    fn stopped(
-        &mut self,
-        gl: &glow::Context,
-        plan: &Plan,
-        stepper: Stepper,
-        image: Rgba,
-        volumes: Vec<VolumeStats>,
-        start: Instant,
-    ) -> Result<Frame, RenderError> {
-        let passes = self.timer.finish(gl);
-        // SAFETY: waits for the frame; no state change.
-        unsafe { gl.finish() };
-        Ok(Frame {
-            width: self.target.width,
-            height: self.target.height,
-            rgba: self.target.read_rgba(gl),
-            view_proj: plan.camera.view_proj,
-            passes,
-            frame_ms: start.elapsed().as_secs_f64() * 1e3,
-            gbuffer: None,
-            masks: Vec::new(),
-            volumes,
-            steps: stepper.steps,
-            step_image: Some(image),
-            stencil: None,
-            plan_stats: plan.stats.clone(),
-            cache: CacheStats::default(),
-        })
+        Ok(variants)
     }
 
     /// How many depth images the last frame made for `light`: 1 for a spot, 6 for an omni
@@ -1089,6 +644,558 @@ impl Renderer {
             );
             gl.bind_framebuffer(glow::FRAMEBUFFER, None);
         }
+    }
+}
+
+/// Whether a frame goes on, or stopped after a walkthrough step with the frame so far.
+type Flow<T> = Result<ControlFlow<Frame, T>, RenderError>;
+
+/// Goes on with the value, or returns the stopped frame as the frame (in
+/// [`FrameRun::run`]).
+macro_rules! or_stopped {
+    ($flow:expr) => {
+        match $flow? {
+            ControlFlow::Continue(v) => v,
+            ControlFlow::Break(frame) => return Ok(frame),
+        }
+    };
+}
+
+/// Goes on with the value, or passes the stopped frame up.
+macro_rules! go_on {
+    ($flow:expr) => {
+        match $flow? {
+            ControlFlow::Continue(v) => v,
+            ControlFlow::Break(frame) => return Ok(ControlFlow::Break(frame)),
+        }
+    };
+}
+
+/// One frame being drawn: the parts of the renderer the passes use, and what the frame has
+/// produced so far.
+struct FrameRun<'a> {
+    ctx: PassContext<'a>,
+    programs: &'a Programs,
+    variants: HashMap<LitVariant, String>,
+    target: &'a Framebuffer,
+    measure_targets: Option<&'a (GBufferTarget, MaskTarget)>,
+    timer: &'a mut PassTimer,
+    shadow_maps: &'a mut ShadowMaps,
+    planner: &'a mut Planner,
+    volume_buffers: &'a mut VolumeBuffers,
+    depth_reducer: &'a mut Option<DepthReducer>,
+    last_maps: &'a mut Vec<LastMap>,
+    empty_vao: glow::VertexArray,
+    request: FrameRequest,
+    /// Shadow maps are drawn into the frame and copied into their textures.
+    copy: bool,
+    stepper: Stepper,
+    cache: CacheStats,
+    start: Instant,
+    volume_stats: Vec<VolumeStats>,
+}
+
+impl<'a> FrameRun<'a> {
+    /// The passes in the paper's order, then the untimed overlays and measurements.
+    fn run(mut self) -> Result<Frame, RenderError> {
+        // Shadow maps of every shadow-mapped light first (paper 3.1).
+        let maps = or_stopped!(self.shadow_map_passes());
+        or_stopped!(self.base_pass());
+        self.volume_draws()?;
+        let stencil = or_stopped!(self.light_passes(&maps));
+        set_scissor(self.ctx.gl, None);
+        let passes = self.timer.finish(self.ctx.gl);
+        // SAFETY: waits for the frame; no state change.
+        unsafe { self.ctx.gl.finish() };
+        let frame_ms = self.start.elapsed().as_secs_f64() * 1e3;
+        self.overlays();
+        // SAFETY: error query only.
+        let error = unsafe { self.ctx.gl.get_error() };
+        if error != glow::NO_ERROR {
+            return Err(RenderError::Gl(format!(
+                "the frame raised GL error 0x{error:x}"
+            )));
+        }
+        let rgba = self.target.read_rgba(self.ctx.gl);
+        let (gbuffer, masks) = self.measure(&maps);
+        let plan = self.ctx.plan;
+        Ok(Frame {
+            width: self.target.width,
+            height: self.target.height,
+            rgba,
+            view_proj: plan.camera.view_proj,
+            passes,
+            frame_ms,
+            gbuffer,
+            masks,
+            volumes: self.volume_stats,
+            steps: self.stepper.steps,
+            step_image: None,
+            stencil,
+            plan_stats: plan.stats.clone(),
+            cache: self.cache,
+        })
+    }
+
+    fn lit_program(&self, shadow_map: bool, cube: bool, six: bool, mask: bool) -> &Program {
+        &self.programs.lit[&self.variants[&LitVariant {
+            shadow_map,
+            cube,
+            six,
+            mask,
+        }]]
+    }
+
+    /// Records a step; the stopped frame when it is the one to stop after, with the image
+    /// `image` makes of the buffer the step wrote.
+    fn step(
+        &mut self,
+        kind: StepKind,
+        lp: Option<&LightPlan>,
+        face: Option<usize>,
+        image: impl FnOnce(&Self) -> Rgba,
+    ) -> Flow<()> {
+        if !self.stepper.record(kind, lp, face) {
+            return Ok(ControlFlow::Continue(()));
+        }
+        let image = image(self);
+        Ok(ControlFlow::Break(self.stopped(image)))
+    }
+
+    /// The frame's colour buffer as an image.
+    fn color_image(&self) -> Rgba {
+        Rgba {
+            width: self.target.width,
+            height: self.target.height,
+            data: self.target.read_rgba(self.ctx.gl),
+        }
+    }
+
+    /// The frame as it stands after a walkthrough step, with that step's buffer as an image.
+    fn stopped(&mut self, image: Rgba) -> Frame {
+        let gl = self.ctx.gl;
+        let passes = self.timer.finish(gl);
+        // SAFETY: waits for the frame; no state change.
+        unsafe { gl.finish() };
+        let plan = self.ctx.plan;
+        Frame {
+            width: self.target.width,
+            height: self.target.height,
+            rgba: self.target.read_rgba(gl),
+            view_proj: plan.camera.view_proj,
+            passes,
+            frame_ms: self.start.elapsed().as_secs_f64() * 1e3,
+            gbuffer: None,
+            masks: Vec::new(),
+            volumes: std::mem::take(&mut self.volume_stats),
+            steps: std::mem::take(&mut self.stepper.steps),
+            step_image: Some(image),
+            stencil: None,
+            plan_stats: plan.stats.clone(),
+            cache: CacheStats::default(),
+        }
+    }
+
+    /// Every shadow-mapped light's views into their depth textures (drawn again only when
+    /// the plan's key for the view changed).
+    fn shadow_map_passes(&mut self) -> Flow<Vec<ViewMap>> {
+        let (gl, plan) = (self.ctx.gl, self.ctx.plan);
+        let sm = &self.ctx.options.shadow_map;
+        let mut maps: Vec<ViewMap> = Vec::new();
+        let fbo = if plan.any(Technique::ShadowMap) && !self.copy {
+            Some(self.shadow_maps.fbo(gl).map_err(RenderError::Gl)?)
+        } else {
+            None
+        };
+        for (pi, lp) in plan.lights.iter().enumerate() {
+            if lp.technique != Technique::ShadowMap {
+                continue;
+            }
+            for (vi, view) in lp.views.iter().enumerate() {
+                let cube = view.kind == ViewKind::Cube;
+                let (texture, holds) = self
+                    .shadow_maps
+                    .slot(gl, lp.light, vi, cube, sm.size, sm.depth_bits)
+                    .map_err(RenderError::Gl)?;
+                let key = lp.view_keys.get(vi).copied().flatten();
+                let faces: Vec<(Option<usize>, glam::Mat4)> = if key.is_some() && holds == key {
+                    self.cache.maps_reused += 1;
+                    Vec::new()
+                } else {
+                    self.cache.maps_rendered += 1;
+                    if cube {
+                        let eye = self.ctx.scene.lights[lp.light].position;
+                        (0..6)
+                            .map(|f| (Some(f), view.projection * cube_face_view(eye, f)))
+                            .collect()
+                    } else {
+                        vec![(None, view.view_proj())]
+                    }
+                };
+                for (face, view_proj) in faces {
+                    go_on!(self.map_face(lp, vi, (face, view_proj), fbo, texture));
+                }
+                self.shadow_maps.set_content(lp.light, vi, key);
+                ShadowMaps::configure(gl, texture, cube, sm.compare, sm.filter);
+                self.last_maps.push(LastMap {
+                    light: lp.light,
+                    view: vi,
+                    texture,
+                    cube,
+                    size: sm.size,
+                });
+                maps.push(ViewMap {
+                    plan_index: pi,
+                    view_index: vi,
+                    texture,
+                });
+            }
+        }
+        Ok(ControlFlow::Continue(maps))
+    }
+
+    /// One view (or cube face) of a light drawn into its map, and copied there from the frame
+    /// when maps are copies.
+    fn map_face(
+        &mut self,
+        lp: &LightPlan,
+        vi: usize,
+        (face, view_proj): (Option<usize>, glam::Mat4),
+        fbo: Option<glow::Framebuffer>,
+        texture: glow::Texture,
+    ) -> Flow<()> {
+        let gl = self.ctx.gl;
+        let size = self.ctx.options.shadow_map.size;
+        let shown = face.or(Some(vi));
+        let target = match fbo {
+            Some(fbo) => DepthTarget::Fbo { fbo, texture },
+            None => DepthTarget::Copy {
+                frame: self.target,
+                texture,
+            },
+        };
+        self.timer
+            .begin(gl, PassId::light(lp.light, Stage::ShadowMap));
+        passes::shadow_map::render(
+            &self.ctx,
+            &self.programs.depth,
+            &passes::shadow_map::MapView {
+                view_proj,
+                size,
+                cube_face: face,
+                order: lp.order,
+                casters: lp.view_casters.get(vi).map(Vec::as_slice),
+            },
+            &target,
+        );
+        let copy = self.copy;
+        let fbo_of_frame = self.target.fbo;
+        go_on!(self.step(StepKind::LightView, Some(lp), shown, |_| {
+            let depth = if copy {
+                debug::read_depth(gl, fbo_of_frame, size, size)
+            } else {
+                debug::read_depth_texture(gl, texture, face, size)
+            };
+            debug::depth_image(&depth, size, size)
+        }));
+        if copy {
+            self.timer
+                .begin(gl, PassId::light(lp.light, Stage::DepthCopy));
+            copy_depth(gl, self.target, texture, size, face);
+            go_on!(self.step(StepKind::DepthCopy, Some(lp), shown, |_| {
+                let depth = debug::read_depth_texture(gl, texture, face, size);
+                debug::depth_image(&depth, size, size)
+            }));
+        }
+        Ok(ControlFlow::Continue(()))
+    }
+
+    /// The unlit world, then the depth the planner asks for.
+    fn base_pass(&mut self) -> Flow<()> {
+        let gl = self.ctx.gl;
+        self.timer.begin(gl, PassId::frame(Stage::Base));
+        self.target.bind(gl);
+        passes::base::draw(&self.ctx, &self.programs.unlit);
+        go_on!(self.step(StepKind::Base, None, None, Self::color_image));
+        let need = self.planner.depth_need(
+            self.ctx.scene,
+            self.ctx.plan,
+            self.ctx.options,
+            self.target.float_depth,
+        );
+        self.cache.depth_reused = need == DepthNeed::Reuse;
+        if let DepthNeed::Read { reduced } = need {
+            self.timer.end(gl);
+            let t = Instant::now();
+            let depth = self.read_depth(reduced)?;
+            self.timer.record_cpu(
+                PassId::frame(Stage::Occlusion),
+                t.elapsed().as_secs_f64() * 1e3,
+            );
+            self.target.bind(gl);
+            self.planner.take_depth(depth, self.ctx.options);
+        } else if need == DepthNeed::Reuse {
+            self.timer.end(gl);
+        }
+        Ok(ControlFlow::Continue(()))
+    }
+
+    /// The frame's depth for the planner: reduced by a shader, or read whole.
+    fn read_depth(&mut self, reduced: bool) -> Result<Option<DepthPyramid>, RenderError> {
+        let gl = self.ctx.gl;
+        let (w, h) = (self.target.width, self.target.height);
+        if !reduced {
+            let values = debug::read_depth_bottom_up(gl, self.target.fbo, w, h);
+            return Ok(DepthPyramid::from_bottom_up(values, w as usize, h as usize));
+        }
+        if !self.depth_reducer.as_ref().is_some_and(|r| r.fits(w, h)) {
+            if let Some(old) = self.depth_reducer.take() {
+                old.delete(gl);
+            }
+            let r = DepthReducer::new(gl, w, h).map_err(RenderError::Gl)?;
+            *self.depth_reducer = Some(r);
+        }
+        let reducer = self.depth_reducer.as_ref().expect("created above");
+        Ok(reducer.read(gl, &self.programs.depth_reduce, self.empty_vao, self.target))
+    }
+
+    /// Each shadow-volume light's draws from the planner, uploaded.
+    fn volume_draws(&mut self) -> Result<(), RenderError> {
+        let (gl, plan) = (self.ctx.gl, self.ctx.plan);
+        if !plan.any(Technique::ShadowVolume) {
+            return Ok(());
+        }
+        let prepare_start = Instant::now();
+        let mut builds_ms = 0.0;
+        for lp in plan
+            .lights
+            .iter()
+            .filter(|l| l.technique == Technique::ShadowVolume)
+        {
+            let v = self
+                .planner
+                .volume_draws(self.ctx.scene, plan, lp, self.ctx.options)?;
+            self.volume_buffers.upload(gl, v).map_err(RenderError::Gl)?;
+            let build_ms = if v.stats.rebuilt {
+                v.stats.build_ms
+            } else {
+                0.0
+            };
+            self.timer
+                .record_cpu(PassId::light(lp.light, Stage::VolumeBuild), build_ms);
+            builds_ms += build_ms;
+            self.cache.volume_parts_built += v.stats.parts_built;
+            self.cache.volume_parts_reused += v.stats.parts_reused;
+            self.volume_stats.push(v.stats);
+        }
+        // The per-frame decisions on the pieces (receivers, rectangles, merges, depth clips)
+        // and the uploads, less the builds timed above.
+        let ms = prepare_start.elapsed().as_secs_f64() * 1e3 - builds_ms;
+        self.timer
+            .record_cpu(PassId::frame(Stage::VolumePieces), ms.max(0.0));
+        Ok(())
+    }
+
+    /// The light's volume draws with their buffers, when it has volumes this frame.
+    fn volumes_of(&self, lp: &LightPlan) -> Option<LightVolumes<'_>> {
+        if lp.technique != Technique::ShadowVolume {
+            return None;
+        }
+        let draws = self.planner.last_volume_draws(lp.light)?;
+        self.volume_buffers.with(draws)
+    }
+
+    /// The shadow-map bindings of light `pi`'s lit passes: per view, whether it is a cube,
+    /// its map, the receivers it lights and its rectangle.
+    fn bindings(
+        &self,
+        maps: &[ViewMap],
+        pi: usize,
+    ) -> Vec<(bool, ShadowBinding<'a>, &'a [u32], Option<Scissor>)> {
+        let lp: &'a LightPlan = &self.ctx.plan.lights[pi];
+        maps.iter()
+            .filter(|m| m.plan_index == pi)
+            .map(|m| {
+                let view = &lp.views[m.view_index];
+                let receivers = lp
+                    .view_receivers
+                    .get(m.view_index)
+                    .map_or(lp.receivers.as_slice(), Vec::as_slice);
+                let rect = lp.view_scissors.get(m.view_index).copied().flatten();
+                (
+                    view.kind == ViewKind::Cube,
+                    ShadowBinding {
+                        view,
+                        texture: m.texture,
+                    },
+                    receivers,
+                    rect.or(lp.scissor),
+                )
+            })
+            .collect()
+    }
+
+    /// Each planned light's passes: its volumes counted and lit through the stencil, or lit
+    /// through its shadow maps (or without shadows). Returns the stencil counts asked for.
+    fn light_passes(&mut self, maps: &[ViewMap]) -> Flow<Option<StencilImage>> {
+        let plan = self.ctx.plan;
+        let mut stencil_image = None;
+        for (pi, lp) in plan.lights.iter().enumerate() {
+            set_scissor(self.ctx.gl, lp.scissor);
+            if self.volumes_of(lp).is_some() {
+                if let Some(image) = go_on!(self.volume_light(lp)) {
+                    stencil_image = Some(image);
+                }
+            } else {
+                self.timer
+                    .begin(self.ctx.gl, PassId::light(lp.light, Stage::Lit));
+                draw_maps(
+                    &self.ctx,
+                    lp,
+                    &self.bindings(maps, pi),
+                    |sm, cube, six| self.lit_program(sm, cube, six, false),
+                    false,
+                );
+                go_on!(self.step(StepKind::Lit, Some(lp), None, Self::color_image));
+            }
+        }
+        Ok(ControlFlow::Continue(stencil_image))
+    }
+
+    /// A shadow-volume light: its volumes into the stencil, its lit pass where the count is
+    /// zero (or everywhere, then the fill quad: `shadow_volume.shading = fill`). Returns its
+    /// stencil counts when the request asks for them.
+    fn volume_light(&mut self, lp: &LightPlan) -> Flow<Option<StencilImage>> {
+        let gl = self.ctx.gl;
+        let o = self.ctx.options;
+        let fill = o.shadow_volume.shading == VolumeShading::Fill;
+        self.timer
+            .begin(gl, PassId::light(lp.light, Stage::Stencil));
+        if let Some(v) = self.volumes_of(lp) {
+            passes::stencil::draw(&self.ctx, &self.programs.volume, &v, lp.scissor);
+        }
+        let wraps = o.shadow_volume.wrap == StencilWrap::Wrap
+            || self.ctx.plan.stencil == StencilPasses::Separate;
+        let (w, h) = (self.target.width, self.target.height);
+        let fbo = self.target.fbo;
+        let read = || debug::read_stencil(gl, fbo, w, h);
+        go_on!(self.step(StepKind::Stencil, Some(lp), None, |_| {
+            debug::stencil_image(&read(), w, h, wraps)
+        }));
+        let stencil = (self.request.stencil_of == Some(lp.light)).then(|| {
+            let values = read();
+            self.target.bind(gl);
+            StencilImage {
+                light: lp.light,
+                width: w,
+                height: h,
+                values,
+                wraps,
+            }
+        });
+        self.timer.begin(gl, PassId::light(lp.light, Stage::Lit));
+        passes::lit::draw(
+            &self.ctx,
+            self.lit_program(false, false, false, false),
+            lp,
+            &LitShadow::Stencil { test: !fill },
+            &lp.receivers,
+        );
+        go_on!(self.step(StepKind::Lit, Some(lp), None, Self::color_image));
+        if fill {
+            self.timer.begin(gl, PassId::light(lp.light, Stage::Fill));
+            passes::stencil::fill(gl, &self.programs.fill, self.empty_vao, FILL_SHADE);
+            go_on!(self.step(StepKind::Fill, Some(lp), None, Self::color_image));
+        }
+        Ok(ControlFlow::Continue(stencil))
+    }
+
+    /// Volumes and silhouettes drawn over the finished frame, when asked for (untimed).
+    fn overlays(&self) {
+        let o = self.request.overlays;
+        if !(o.volumes || o.silhouettes) {
+            return;
+        }
+        self.target.bind(self.ctx.gl);
+        let shown = self
+            .ctx
+            .plan
+            .lights
+            .iter()
+            .filter(|lp| o.light.is_none_or(|l| l == lp.light));
+        for lp in shown {
+            if let Some(v) = self.volumes_of(lp) {
+                passes::debug::volumes(
+                    &self.ctx,
+                    &self.programs.debug_volume,
+                    &v,
+                    o.volumes,
+                    o.silhouettes,
+                );
+            }
+        }
+    }
+
+    /// The G-buffer and each light's decision mask, when the request asks for masks
+    /// (untimed, after the frame).
+    fn measure(&self, maps: &[ViewMap]) -> (Option<GBuffer>, Vec<Mask>) {
+        let gl = self.ctx.gl;
+        let plan = self.ctx.plan;
+        let Some((gtarget, mtarget)) = self.measure_targets.filter(|_| self.request.masks) else {
+            return (None, Vec::new());
+        };
+        gtarget_bind(gl, gtarget);
+        passes::gbuffer::draw(&self.ctx, &self.programs.gbuffer);
+        let gbuffer = read_gbuffer(gl, gtarget);
+        let mut masks = Vec::with_capacity(plan.lights.len() + plan.culled.len());
+        for (pi, lp) in plan.lights.iter().enumerate() {
+            mtarget.bind(gl);
+            set_scissor(gl, None);
+            // SAFETY: clears the mask to "not a receiver"; depth and stencil untouched.
+            unsafe {
+                gl.color_mask(true, true, true, true);
+                gl.clear_color(0.0, 0.0, 0.0, 0.0);
+                gl.clear(glow::COLOR_BUFFER_BIT);
+            }
+            set_scissor(gl, lp.scissor);
+            match self.volumes_of(lp) {
+                Some(v) => {
+                    passes::stencil::draw(&self.ctx, &self.programs.volume, &v, lp.scissor);
+                    passes::lit::draw_mask(
+                        &self.ctx,
+                        self.lit_program(false, false, false, true),
+                        lp,
+                        &LitShadow::Stencil { test: true },
+                        &lp.receivers,
+                    );
+                }
+                None => draw_maps(
+                    &self.ctx,
+                    lp,
+                    &self.bindings(maps, pi),
+                    |sm, cube, six| self.lit_program(sm, cube, six, true),
+                    true,
+                ),
+            }
+            set_scissor(gl, None);
+            masks.push(Mask {
+                light: lp.light,
+                width: mtarget.width,
+                height: mtarget.height,
+                values: mtarget.read(gl),
+            });
+        }
+        // Culled lights reach no pixel in view.
+        for &light in &plan.culled {
+            masks.push(Mask {
+                light,
+                width: mtarget.width,
+                height: mtarget.height,
+                values: vec![0; (mtarget.width * mtarget.height) as usize],
+            });
+        }
+        masks.sort_by_key(|m| m.light);
+        (Some(gbuffer), masks)
     }
 }
 
@@ -1163,7 +1270,7 @@ impl Drop for Renderer {
         self.programs.delete(gl);
         self.target.delete(gl);
         self.shadow_maps.delete(gl);
-        self.volumes.delete(gl);
+        self.volume_buffers.delete(gl);
         if let Some((g, m)) = self.measure_targets.take() {
             g.delete(gl);
             m.delete(gl);

@@ -4,7 +4,7 @@
 //! which serialises the pipeline but still attributes time to the right pass. GL_TIMESTAMP is never
 //! used: llvmpipe's is not accurate. Query objects are pooled so long runs create none.
 
-use crate::frame::PassTime;
+use crate::plan::pass::{Clock, PassId, PassTime};
 use glow::HasContext;
 use std::time::Instant;
 
@@ -18,8 +18,8 @@ pub struct PassTimer {
     /// This frame times nothing (the CPU clock would need glFinish between passes).
     silent: bool,
     pool: Vec<glow::Query>,
-    open: Option<(String, Span)>,
-    gpu_done: Vec<(String, glow::Query)>,
+    open: Option<(PassId, Span)>,
+    gpu_done: Vec<(PassId, glow::Query)>,
     results: Vec<PassTime>,
 }
 
@@ -46,12 +46,11 @@ impl PassTimer {
     }
 
     /// Starts timing the GPU work of pass `name`; ends any pass still open.
-    pub fn begin(&mut self, gl: &glow::Context, name: impl Into<String>) {
+    pub fn begin(&mut self, gl: &glow::Context, name: PassId) {
         self.end(gl);
         if self.silent {
             return;
         }
-        let name = name.into();
         let span = if self.use_queries {
             let q = match self.pool.pop() {
                 Some(q) => q,
@@ -87,9 +86,9 @@ impl PassTimer {
                 // SAFETY: as above.
                 unsafe { gl.finish() };
                 self.results.push(PassTime {
-                    name,
+                    pass: name,
                     ms: t.elapsed().as_secs_f64() * 1e3,
-                    clock: "cpu",
+                    clock: Clock::Cpu,
                 });
             }
             None => {}
@@ -97,14 +96,14 @@ impl PassTimer {
     }
 
     /// Records a CPU-only stage (e.g. building shadow volumes).
-    pub fn record_cpu(&mut self, name: impl Into<String>, ms: f64) {
+    pub fn record_cpu(&mut self, name: PassId, ms: f64) {
         if self.silent {
             return;
         }
         self.results.push(PassTime {
-            name: name.into(),
+            pass: name,
             ms,
-            clock: "cpu",
+            clock: Clock::Cpu,
         });
     }
 
@@ -115,9 +114,9 @@ impl PassTimer {
             // SAFETY: the query has ended; GL blocks until its result is available.
             let ns = unsafe { gl.get_query_parameter_u64(q, glow::QUERY_RESULT) };
             self.results.push(PassTime {
-                name,
+                pass: name,
                 ms: ns as f64 / 1e6,
-                clock: "gpu",
+                clock: Clock::Gpu,
             });
             self.pool.push(q);
         }

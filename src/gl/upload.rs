@@ -1,7 +1,8 @@
 //! The scene on the GPU: one vertex buffer, one index buffer with surfaces sorted by draw state,
 //! textures and lightmaps. Built once per scene.
 
-use crate::scene::{BakedLight, Image, Scene, SurfaceOwner, Vertex};
+use crate::images::Rgba;
+use crate::scene::{BakedLight, Scene, SurfaceOwner, Vertex};
 use glow::HasContext;
 
 /// A run of indices drawn with one state.
@@ -47,7 +48,7 @@ fn state_key(scene: &Scene, s: usize) -> (u8, usize, usize, usize, u8) {
 
 fn upload_image(
     gl: &glow::Context,
-    image: &Image,
+    image: &Rgba,
     mipmaps: bool,
     repeat: bool,
 ) -> Result<glow::Texture, String> {
@@ -66,7 +67,7 @@ fn upload_image(
             0,
             glow::RGBA,
             glow::UNSIGNED_BYTE,
-            glow::PixelUnpackData::Slice(Some(&image.rgba)),
+            glow::PixelUnpackData::Slice(Some(&image.data)),
         );
         let wrap = if repeat {
             glow::REPEAT
@@ -115,14 +116,14 @@ impl GpuScene {
             let range = surf.first_index as usize..(surf.first_index + surf.index_count) as usize;
             indices.extend_from_slice(&scene.indices[range]);
         }
-        let fit = |img: &Image| -> Image {
+        let fit = |img: &Rgba| -> Rgba {
             if img.width.max(img.height) > max_texture_size || img.width == 0 || img.height == 0 {
                 log::warn!(
                     "texture {}x{} exceeds GL_MAX_TEXTURE_SIZE {max_texture_size}; drawing white",
                     img.width,
                     img.height
                 );
-                Image::solid([255, 255, 255, 255])
+                Rgba::solid([255, 255, 255, 255])
             } else {
                 img.clone()
             }
@@ -156,7 +157,7 @@ impl GpuScene {
                 .iter()
                 .map(|t| upload_image(gl, &fit(t), false, false))
                 .collect::<Result<_, _>>()?;
-            let white = upload_image(gl, &Image::solid([255, 255, 255, 255]), false, true)?;
+            let white = upload_image(gl, &Rgba::solid([255, 255, 255, 255]), false, true)?;
             Ok(GpuScene {
                 vao,
                 vbo,

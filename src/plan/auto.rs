@@ -9,7 +9,7 @@
 //!   which `0.41% × (512 / size)^0.75` follows within a factor 1.4; 16-bit depth multiplies it
 //!   by 19 (7.75% against 0.41% on the built-in scene).
 
-use crate::frame::PassTime;
+use super::pass::PassTime;
 use crate::options::{DepthBits, Options, Technique};
 use std::collections::HashMap;
 
@@ -31,17 +31,12 @@ impl CostMemory {
         self.costs.get(&(light, technique)).copied()
     }
 
-    /// Adds a frame's passes: `light<i>.<stage>` times summed per light, under the technique
+    /// Adds a frame's passes: each light's pass times summed, under the technique
     /// the light ran with.
     pub fn record(&mut self, passes: &[PassTime], techniques: &[(usize, Technique)]) {
         let mut per_light: HashMap<usize, f64> = HashMap::new();
         for p in passes {
-            if let Some(i) = p
-                .name
-                .strip_prefix("light")
-                .and_then(|rest| rest.split_once('.'))
-                .and_then(|(i, _)| i.parse::<usize>().ok())
-            {
+            if let Some(i) = p.pass.light {
                 *per_light.entry(i).or_default() += p.ms;
             }
         }
@@ -166,9 +161,9 @@ mod tests {
 
     fn pass(name: &str, ms: f64) -> PassTime {
         PassTime {
-            name: name.into(),
+            pass: super::super::pass::PassId::parse(name).unwrap(),
             ms,
-            clock: "cpu",
+            clock: super::super::pass::Clock::Cpu,
         }
     }
 

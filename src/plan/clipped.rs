@@ -9,7 +9,7 @@
 //! rest through an index list costs a fraction of that.
 
 use super::depth_bounds::MAX_PLANES;
-use crate::scene::Aabb;
+use crate::geometry::Aabb;
 use glam::{Mat4, Vec3, Vec4};
 
 /// A corner counts as beyond a plane only when its distance is below minus this share of the

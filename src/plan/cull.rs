@@ -2,8 +2,8 @@
 //! pyramid, and the box a caster's shadow can occupy within the light's range. Every test is
 //! conservative: it may keep what is not needed, never drop what is.
 
-use super::frustum::Frustum;
-use crate::scene::Aabb;
+use crate::geometry::Aabb;
+use crate::geometry::Frustum;
 use glam::{Vec3, Vec4};
 
 /// Whether the ball (`center`, `radius`) meets the box.

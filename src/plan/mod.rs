@@ -6,21 +6,22 @@ pub mod auto;
 pub mod clipped;
 pub mod cull;
 pub mod depth_bounds;
-pub mod frustum;
 pub mod merge;
 pub mod occlusion;
+pub mod pass;
+pub mod planner;
 pub mod scissor;
+pub mod volume_draws;
 
+use crate::geometry::{Aabb, Frustum, projection};
 use crate::options::{
     CountingMode, OmniMode, Options, ShadowMapOptions, StencilPasses, Technique, VolumeProjection,
 };
-use crate::q3::vis::VisStats;
-use crate::scene::{Aabb, Camera, Scene, SurfaceOwner};
-use crate::shadow::projection;
+use crate::scene::vis::VisStats;
+use crate::scene::{Camera, Scene, SurfaceOwner};
 use crate::shadow::views::{ShadowView, ViewKind, shadow_views};
-use crate::shadow::volume::{self, Counting};
+use crate::shadow::volume::{self, CasterGroups, Counting};
 use auto::CostMemory;
-use frustum::Frustum;
 use glam::{Mat3, Mat4, Vec3};
 use scissor::Scissor;
 use serde::Serialize;
@@ -213,22 +214,45 @@ fn mat_bits(m: &Mat4) -> [u32; 16] {
 }
 
 impl Plan {
+    /// Whether some planned light runs `technique`.
+    pub fn any(&self, technique: Technique) -> bool {
+        self.lights.iter().any(|l| l.technique == technique)
+    }
+
     /// The plan for the scene's own camera.
     pub fn build(scene: &Scene, options: &Options) -> Plan {
         Plan::build_at(scene, &scene.camera, options)
     }
 
-    /// The plan for `camera` (a camera path's frame, the viewer's camera).
+    /// The plan for `camera` (a camera path's frame, the viewer's camera), with the caster
+    /// groups built afresh (a [`planner::Planner`] keeps them across frames).
     pub fn build_at(scene: &Scene, camera: &Camera, options: &Options) -> Plan {
-        Plan::build_with(scene, camera, options, &CostMemory::default())
+        let groups = Plan::needs_casters(scene, options).then(|| CasterGroups::build(scene));
+        Plan::build_with(
+            scene,
+            camera,
+            options,
+            &CostMemory::default(),
+            groups.as_ref(),
+        )
     }
 
-    /// The plan for `camera`, with the costs measured so far (for `technique = auto`).
+    /// Whether planning a frame of `scene` under `options` needs its caster groups: some
+    /// light may use shadow volumes.
+    pub fn needs_casters(scene: &Scene, options: &Options) -> bool {
+        let n = scene.lights.len();
+        options.uses(n, Technique::ShadowVolume) || options.uses(n, Technique::Auto)
+    }
+
+    /// The plan for `camera`, with the costs measured so far (for `technique = auto`) and the
+    /// scene's caster groups (needed when [`Plan::needs_casters`]; without them no light
+    /// gets volumes).
     pub fn build_with(
         scene: &Scene,
         camera: &Camera,
         options: &Options,
         memory: &CostMemory,
+        groups: Option<&CasterGroups>,
     ) -> Plan {
         let n = scene.lights.len();
         let may = |t: Technique| options.uses(n, t) || options.uses(n, Technique::Auto);
@@ -319,7 +343,7 @@ impl Plan {
             .map(|i| i as u32)
             .collect();
         // Shadow-volume casters, with their world bounds (for culling and the depth-pass test).
-        let groups = uses_volumes.then(|| scene.caster_groups());
+        let groups = groups.filter(|_| uses_volumes);
         let p = &options.plan;
         let on = p.enabled;
         // `plan.omni_cube`: where six spots and a cube cover the same directions (no narrowed

@@ -5,7 +5,7 @@
 
 use super::CameraSetup;
 use super::scissor::{Projection, Scissor, project};
-use crate::scene::Aabb;
+use crate::geometry::Aabb;
 
 /// How far (in window depth) a box must lie behind the depth buffer to count as hidden: a few
 /// hundred steps of a 24-bit buffer, against rounding in the rasterised depth and in the box's

@@ -10,6 +10,7 @@
 //! One defect of shipped maps is repaired instead of rejected and reported in `Bsp::warnings`:
 //! a surface's fog number outside the fogs lump (shadowlab draws no fog).
 
+pub use crate::scene::vis::{Leaf, Node, Plane, Vis};
 use thiserror::Error;
 
 pub const LUMP_NAMES: [&str; 17] = [
@@ -91,34 +92,6 @@ pub struct BspShader {
 }
 
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Plane {
-    pub normal: [f32; 3],
-    pub dist: f32,
-}
-
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Node {
-    pub plane: u32,
-    /// ≥ 0: a node; < 0: leaf `-(child + 1)`.
-    pub children: [i32; 2],
-    pub mins: [i32; 3],
-    pub maxs: [i32; 3],
-}
-
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Leaf {
-    /// -1: outside the map (solid or void).
-    pub cluster: i32,
-    pub area: i32,
-    pub mins: [i32; 3],
-    pub maxs: [i32; 3],
-    pub first_leaf_surface: u32,
-    pub num_leaf_surfaces: u32,
-    pub first_leaf_brush: u32,
-    pub num_leaf_brushes: u32,
-}
-
-#[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Model {
     pub mins: [f32; 3],
     pub maxs: [f32; 3],
@@ -187,26 +160,6 @@ pub struct Surface {
 impl Surface {
     pub fn lightmap_index(&self) -> Option<usize> {
         (self.lightmap >= 0).then_some(self.lightmap as usize)
-    }
-}
-
-/// The potentially visible set: one bit row per cluster.
-#[derive(Debug, Clone, PartialEq)]
-pub struct Vis {
-    pub num_clusters: u32,
-    pub cluster_bytes: u32,
-    pub data: Vec<u8>,
-}
-
-impl Vis {
-    /// Whether `to` may be seen from `from`. Clusters outside the table (e.g. -1) see nothing.
-    pub fn visible(&self, from: i32, to: i32) -> bool {
-        if from < 0 || to < 0 || from as u32 >= self.num_clusters || to as u32 >= self.num_clusters
-        {
-            return false;
-        }
-        let row = from as usize * self.cluster_bytes as usize;
-        self.data[row + (to as usize >> 3)] & (1 << (to & 7)) != 0
     }
 }
 

@@ -33,11 +33,10 @@ pub struct SceneBuilder<'a> {
 
 impl<'a> SceneBuilder<'a> {
     pub fn new(name: &str, shaders: &'a ShaderLibrary) -> SceneBuilder<'a> {
+        let mut scene = Scene::default();
+        scene.name = name.to_string();
         SceneBuilder {
-            scene: Scene {
-                name: name.to_string(),
-                ..Scene::default()
-            },
+            scene,
             shaders,
             materials: HashMap::new(),
             image_refs: Vec::new(),

@@ -4,7 +4,8 @@
 //! GL-free. Malformed input never panics: every count, offset and float is checked before it is
 //! used or allocated for, and each failure is a specific [`Md3Error`].
 
-use crate::scene::{Aabb, Vertex};
+use crate::geometry::Aabb;
+use crate::scene::Vertex;
 use glam::{Mat3, Mat4, Vec3};
 use thiserror::Error;
 

@@ -12,5 +12,4 @@ pub mod pk3;
 pub mod rtlights;
 pub mod shader;
 pub mod textures;
-pub mod vis;
 pub mod world;

@@ -4,7 +4,7 @@
 
 use super::pk3::Vfs;
 use super::shader::image_candidates;
-use crate::scene::Image;
+use crate::images::Rgba;
 use indicatif::{ProgressBar, ProgressStyle};
 use rayon::prelude::*;
 use std::io::Cursor;
@@ -13,7 +13,7 @@ use std::io::Cursor;
 pub const MAX_TEXTURE_SIDE: u32 = 4096;
 
 /// The texture drawn where an image is missing: magenta and black, impossible to overlook.
-pub fn missing_checker() -> Image {
+pub fn missing_checker() -> Rgba {
     let size = 64u32;
     let mut rgba = Vec::with_capacity((size * size * 4) as usize);
     for y in 0..size {
@@ -26,15 +26,15 @@ pub fn missing_checker() -> Image {
             });
         }
     }
-    Image {
+    Rgba {
         width: size,
         height: size,
-        rgba,
+        data: rgba,
     }
 }
 
 /// Decodes a TGA or JPEG with size limits; `None` if it is not a readable image.
-pub fn decode(name: &str, data: &[u8]) -> Result<Image, String> {
+pub fn decode(name: &str, data: &[u8]) -> Result<Rgba, String> {
     let format = if name.ends_with(".jpg") || name.ends_with(".jpeg") {
         image::ImageFormat::Jpeg
     } else if name.ends_with(".tga") {
@@ -56,16 +56,16 @@ pub fn decode(name: &str, data: &[u8]) -> Result<Image, String> {
     if width == 0 || height == 0 {
         return Err(format!("{name}: empty image"));
     }
-    Ok(Image {
+    Ok(Rgba {
         width,
         height,
-        rgba: rgba.into_raw(),
+        data: rgba.into_raw(),
     })
 }
 
 /// Loaded images in the order of the references given, and which references failed.
 pub struct LoadedImages {
-    pub images: Vec<Image>,
+    pub images: Vec<Rgba>,
     /// (reference, why) for each reference that got the checker.
     pub missing: Vec<(String, String)>,
 }
@@ -86,7 +86,7 @@ pub fn load_images(vfs: &Vfs, references: &[String], progress: bool) -> LoadedIm
         ProgressBar::hidden()
     };
     // Reading from the archives is serialised inside the VFS; decoding runs in parallel.
-    let results: Vec<Result<Image, String>> = references
+    let results: Vec<Result<Rgba, String>> = references
         .par_iter()
         .map(|r| {
             let found = image_candidates(r).into_iter().find(|c| vfs.contains(c));
@@ -127,7 +127,7 @@ mod tests {
         tga.extend_from_slice(&[255, 0, 0, 255, 0, 0, 255, 128]);
         let img = decode("a.tga", &tga).unwrap();
         assert_eq!((img.width, img.height), (2, 1));
-        assert_eq!(&img.rgba, &[0, 0, 255, 255, 255, 0, 0, 128]);
+        assert_eq!(&img.data, &[0, 0, 255, 255, 255, 0, 0, 128]);
         assert!(decode("b.tga", &tga[..10]).is_err());
         assert!(decode("c.jpg", b"not a jpeg").is_err());
         assert!(decode("d.bmp", &tga).is_err());
@@ -146,7 +146,7 @@ mod tests {
     fn checker_is_half_magenta() {
         let c = missing_checker();
         let magenta = c
-            .rgba
+            .data
             .chunks_exact(4)
             .filter(|p| p == &[255, 0, 255, 255])
             .count();

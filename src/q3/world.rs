@@ -7,9 +7,10 @@ use super::builder::SceneBuilder;
 use super::entities::{self, Entity, EntityError, SpawnPoint};
 use super::patch::{self, PatchError};
 use super::pk3::{Vfs, VfsError};
-use super::vis::WorldVis;
+use crate::images::Rgba;
 use crate::options::Q3Options;
-use crate::scene::{BakedLight, Image, SurfaceKind, SurfaceOwner, Vertex};
+use crate::scene::vis::{BspTree, WorldVis};
+use crate::scene::{BakedLight, SurfaceKind, SurfaceOwner, Vertex};
 use crate::shadow::edges::{Connectivity, EdgeCounts};
 use glam::Vec3;
 use serde::Serialize;
@@ -100,16 +101,16 @@ pub fn shift_color(rgb: [u8; 3], shift: u32) -> [u8; 3] {
     }
 }
 
-fn lightmap_image(page: &[u8], shift: u32) -> Image {
+fn lightmap_image(page: &[u8], shift: u32) -> Rgba {
     let mut rgba = Vec::with_capacity(bsp::LIGHTMAP_SIDE * bsp::LIGHTMAP_SIDE * 4);
     for px in page.chunks_exact(3) {
         let c = shift_color([px[0], px[1], px[2]], shift);
         rgba.extend_from_slice(&[c[0], c[1], c[2], 255]);
     }
-    Image {
+    Rgba {
         width: bsp::LIGHTMAP_SIDE as u32,
         height: bsp::LIGHTMAP_SIDE as u32,
-        rgba,
+        data: rgba,
     }
 }
 
@@ -290,7 +291,16 @@ pub fn add_world(
     counts.vertices.welded = connectivity.positions.len();
     counts.edges = connectivity.counts();
 
-    builder.scene.world = Some(Arc::new(WorldVis::new(bsp, surface_map)));
+    builder.scene.world = Some(Arc::new(WorldVis::new(
+        BspTree {
+            planes: bsp.planes.clone(),
+            nodes: bsp.nodes.clone(),
+            leafs: bsp.leafs.clone(),
+            leaf_surfaces: bsp.leaf_surfaces.clone(),
+            vis: bsp.vis.clone(),
+        },
+        surface_map,
+    )));
     let entities =
         entities::parse_entities(&bsp.entities).map_err(|source| MapError::Entities {
             path: bsp_path.to_string(),

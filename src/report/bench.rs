@@ -8,11 +8,12 @@
 //! reused by every configuration).
 
 use crate::frame::CacheStats;
-use crate::frame::{Frame, Mask};
-use crate::gl::volumes::VolumeStats;
+use crate::frame::Frame;
 use crate::gl::{FrameRequest, RenderError, Renderer};
+use crate::images::Mask;
 use crate::options::{OptionError, Options, Technique};
 use crate::plan::PlanStats;
+use crate::plan::volume_draws::VolumeStats;
 use crate::scene::Scene;
 use crate::scene::path::PathKey;
 use crate::truth::{self, Counts, Reference, Tracing};
@@ -196,11 +197,9 @@ pub struct BenchRow {
 pub fn pass_totals(frame: &Frame) -> BTreeMap<String, f64> {
     let mut out = BTreeMap::new();
     for p in &frame.passes {
-        *out.entry(p.name.clone()).or_insert(0.0) += p.ms;
-        if let Some((light, stage)) = p.name.split_once('.')
-            && light.starts_with("light")
-        {
-            *out.entry(format!("lights.{stage}")).or_insert(0.0) += p.ms;
+        *out.entry(p.pass.to_string()).or_insert(0.0) += p.ms;
+        if p.pass.light.is_some() {
+            *out.entry(p.pass.summed_name()).or_insert(0.0) += p.ms;
         }
     }
     out
@@ -273,7 +272,10 @@ fn pass_breakdown(
         for (name, ms) in pass_totals(&f) {
             m.passes.entry(name).or_default().push(ms);
         }
-        if f.passes.iter().any(|p| p.clock == "gpu") {
+        if f.passes
+            .iter()
+            .any(|p| p.clock == crate::plan::pass::Clock::Gpu)
+        {
             m.clock = "gpu";
         }
     }

@@ -1,8 +1,6 @@
 //! Image helpers for reports: saving, and cropping a zoomed window around shadow boundaries.
 
-use crate::frame::{Mask, MaskValue};
-
-pub use crate::frame::Rgba;
+use crate::images::{Mask, MaskValue, Rgba};
 
 impl Rgba {
     /// The window at (x, y) of size w × h (clamped to the image), each pixel repeated `zoom`

@@ -15,7 +15,8 @@
 
 use super::builtin::grate_image;
 use super::shapes::{MeshData, cuboid, cylinder, sphere, torus};
-use super::{AlphaFunc, Cull, Image, Material, Scene, SurfaceKind, SurfaceOwner, Vertex};
+use super::{AlphaFunc, Cull, Material, Scene, SurfaceKind, SurfaceOwner, Vertex};
+use crate::images::Rgba;
 use glam::Vec3;
 use serde::Deserialize;
 
@@ -166,13 +167,13 @@ impl ShapeSection {
     fn material(&self, name: &str, scene: &mut Scene) -> Material {
         let image = match (&self.grate, self.color) {
             (Some(g), _) => grate_image(64, g.cells.clamp(1, 32), g.bar.clamp(1, 32)),
-            (None, Some(c)) => Image::solid([
+            (None, Some(c)) => Rgba::solid([
                 (c[0].clamp(0.0, 1.0) * 255.0) as u8,
                 (c[1].clamp(0.0, 1.0) * 255.0) as u8,
                 (c[2].clamp(0.0, 1.0) * 255.0) as u8,
                 255,
             ]),
-            (None, None) => Image::solid([200, 200, 200, 255]),
+            (None, None) => Rgba::solid([200, 200, 200, 255]),
         };
         scene.textures.push(image);
         let mut m = Material::opaque(name, Some(scene.textures.len() - 1));

@@ -10,7 +10,8 @@
 //! It needs no files, so `render`, `view`, the tests and CI always have a scene.
 
 use super::shapes::{MeshData, cuboid, cylinder, sphere, torus};
-use super::{AlphaFunc, Camera, Cull, Image, Light, Material, Scene, SurfaceKind, SurfaceOwner};
+use super::{AlphaFunc, Camera, Cull, Light, Material, Scene, SurfaceKind, SurfaceOwner};
+use crate::images::Rgba;
 use glam::Vec3;
 
 /// Half the side of the square room, in Quake units.
@@ -25,7 +26,7 @@ pub const OMNI_POSITION: Vec3 = Vec3::new(170.0, -140.0, 130.0);
 /// Height of the horizontal grate.
 pub const GRATE_Z: f32 = 92.0;
 
-fn checker(size: u32, cell: u32, a: [u8; 3], b: [u8; 3]) -> Image {
+fn checker(size: u32, cell: u32, a: [u8; 3], b: [u8; 3]) -> Rgba {
     let mut rgba = Vec::with_capacity((size * size * 4) as usize);
     for y in 0..size {
         for x in 0..size {
@@ -37,14 +38,14 @@ fn checker(size: u32, cell: u32, a: [u8; 3], b: [u8; 3]) -> Image {
             rgba.extend_from_slice(&[c[0], c[1], c[2], 255]);
         }
     }
-    Image {
+    Rgba {
         width: size,
         height: size,
-        rgba,
+        data: rgba,
     }
 }
 
-fn bricks(size: u32) -> Image {
+fn bricks(size: u32) -> Rgba {
     let mut rgba = Vec::with_capacity((size * size * 4) as usize);
     for y in 0..size {
         for x in 0..size {
@@ -59,15 +60,15 @@ fn bricks(size: u32) -> Image {
             rgba.extend_from_slice(&[c[0], c[1], c[2], 255]);
         }
     }
-    Image {
+    Rgba {
         width: size,
         height: size,
-        rgba,
+        data: rgba,
     }
 }
 
 /// Metal bars with square holes: alpha 255 on bars, 0 in holes.
-pub fn grate_image(size: u32, cells: u32, bar: u32) -> Image {
+pub fn grate_image(size: u32, cells: u32, bar: u32) -> Rgba {
     let cell = size / cells;
     let mut rgba = Vec::with_capacity((size * size * 4) as usize);
     for y in 0..size {
@@ -76,10 +77,10 @@ pub fn grate_image(size: u32, cells: u32, bar: u32) -> Image {
             rgba.extend_from_slice(&[170, 172, 180, if on_bar { 255 } else { 0 }]);
         }
     }
-    Image {
+    Rgba {
         width: size,
         height: size,
-        rgba,
+        data: rgba,
     }
 }
 
@@ -89,7 +90,7 @@ pub fn default_scene() -> Scene {
         name: "builtin".to_string(),
         ..Scene::default()
     };
-    let add_material = |scene: &mut Scene, name: &str, image: Image| -> usize {
+    let add_material = |scene: &mut Scene, name: &str, image: Rgba| -> usize {
         scene.textures.push(image);
         scene
             .materials
@@ -107,13 +108,13 @@ pub fn default_scene() -> Scene {
         "box",
         checker(16, 8, [214, 140, 60], [190, 120, 50]),
     );
-    let sphere_mat = add_material(&mut scene, "sphere", Image::solid([120, 170, 230, 255]));
+    let sphere_mat = add_material(&mut scene, "sphere", Rgba::solid([120, 170, 230, 255]));
     let torus_mat = add_material(
         &mut scene,
         "torus",
         checker(16, 4, [110, 200, 110], [80, 160, 80]),
     );
-    let pole_mat = add_material(&mut scene, "pole", Image::solid([230, 230, 230, 255]));
+    let pole_mat = add_material(&mut scene, "pole", Rgba::solid([230, 230, 230, 255]));
     let grate_mat = add_material(&mut scene, "grate", grate_image(64, 4, 4));
     scene.materials[grate_mat].alpha_test = Some(AlphaFunc::Ge128);
     scene.materials[grate_mat].cull = Cull::None;
@@ -224,7 +225,7 @@ mod tests {
     #[test]
     fn grate_texture_has_holes() {
         let g = grate_image(64, 4, 4);
-        let opaque = g.rgba.chunks_exact(4).filter(|p| p[3] == 255).count();
+        let opaque = g.data.chunks_exact(4).filter(|p| p[3] == 255).count();
         // Each 16x16 cell has a 4-texel bar on two sides: 16*16 - 12*12 = 112 of 256.
         assert_eq!(opaque, 112 * 16);
     }

@@ -408,9 +408,6 @@ impl SceneFile {
         for (i, shape) in self.shape.iter().enumerate() {
             shape.add_to(i, &mut scene).map_err(|m| self.invalid(m))?;
         }
-        if !self.shape.is_empty() {
-            scene.invalidate_casters();
-        }
         self.apply_camera(&mut scene.camera)?;
         for (i, l) in self.light.iter().enumerate() {
             let light = self.light(i, l)?;

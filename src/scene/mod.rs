@@ -11,10 +11,13 @@ pub mod file;
 pub mod light;
 pub mod path;
 pub mod shapes;
+pub mod vis;
 
 pub use camera::Camera;
 pub use light::{Light, LightKind};
 
+use crate::geometry::Aabb;
+use crate::images::Rgba;
 use glam::{Mat4, Vec3};
 
 /// One vertex of every mesh: the single layout the GL layer uploads.
@@ -43,119 +46,6 @@ impl Vertex {
     }
     pub fn pos(&self) -> Vec3 {
         Vec3::from_array(self.position)
-    }
-}
-
-/// Axis-aligned bounds.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Aabb {
-    pub min: Vec3,
-    pub max: Vec3,
-}
-
-impl Aabb {
-    pub const EMPTY: Aabb = Aabb {
-        min: Vec3::splat(f32::INFINITY),
-        max: Vec3::splat(f32::NEG_INFINITY),
-    };
-    pub fn is_empty(&self) -> bool {
-        self.min.x > self.max.x || self.min.y > self.max.y || self.min.z > self.max.z
-    }
-    pub fn extend(&mut self, p: Vec3) {
-        self.min = self.min.min(p);
-        self.max = self.max.max(p);
-    }
-    /// Whether the boxes overlap (touching counts); empty boxes meet nothing.
-    pub fn intersects(&self, o: &Aabb) -> bool {
-        !self.is_empty()
-            && !o.is_empty()
-            && self.min.cmple(o.max).all()
-            && o.min.cmple(self.max).all()
-    }
-
-    /// The overlap of two boxes (empty when they do not meet).
-    pub fn intersection(&self, o: &Aabb) -> Aabb {
-        Aabb {
-            min: self.min.max(o.min),
-            max: self.max.min(o.max),
-        }
-    }
-
-    /// The corner furthest along a direction whose components are non-negative where
-    /// `positive` is set (a plane's "positive vertex": the box reaches the plane's inner side
-    /// iff this corner does).
-    pub fn furthest_corner(&self, positive: glam::BVec3) -> Vec3 {
-        Vec3::select(positive, self.max, self.min)
-    }
-
-    pub fn union(&self, o: &Aabb) -> Aabb {
-        Aabb {
-            min: self.min.min(o.min),
-            max: self.max.max(o.max),
-        }
-    }
-    pub fn from_points(points: impl IntoIterator<Item = Vec3>) -> Aabb {
-        let mut b = Aabb::EMPTY;
-        for p in points {
-            b.extend(p);
-        }
-        b
-    }
-    pub fn center(&self) -> Vec3 {
-        (self.min + self.max) * 0.5
-    }
-    pub fn corners(&self) -> [Vec3; 8] {
-        let (a, b) = (self.min, self.max);
-        [
-            Vec3::new(a.x, a.y, a.z),
-            Vec3::new(b.x, a.y, a.z),
-            Vec3::new(a.x, b.y, a.z),
-            Vec3::new(b.x, b.y, a.z),
-            Vec3::new(a.x, a.y, b.z),
-            Vec3::new(b.x, a.y, b.z),
-            Vec3::new(a.x, b.y, b.z),
-            Vec3::new(b.x, b.y, b.z),
-        ]
-    }
-    pub fn transformed(&self, m: &Mat4) -> Aabb {
-        if self.is_empty() {
-            return *self;
-        }
-        Aabb::from_points(self.corners().iter().map(|c| m.transform_point3(*c)))
-    }
-}
-
-/// An RGBA8 image held on the CPU (textures, lightmaps).
-#[derive(Debug, Clone, PartialEq)]
-pub struct Image {
-    pub width: u32,
-    pub height: u32,
-    /// Row-major RGBA8, first row at the top (v = 0).
-    pub rgba: Vec<u8>,
-}
-
-impl Image {
-    pub fn solid(rgba: [u8; 4]) -> Image {
-        Image {
-            width: 1,
-            height: 1,
-            rgba: rgba.to_vec(),
-        }
-    }
-    /// The texel at texture coordinates (u, v), wrapped, nearest: what the exact reference reads
-    /// for alpha-tested surfaces.
-    pub fn sample_nearest(&self, u: f32, v: f32) -> [u8; 4] {
-        let fx = u - u.floor();
-        let fy = v - v.floor();
-        let x = ((fx * self.width as f32) as u32).min(self.width - 1);
-        let y = ((fy * self.height as f32) as u32).min(self.height - 1);
-        let i = ((y * self.width + x) * 4) as usize;
-        [
-            self.rgba[i],
-            self.rgba[i + 1],
-            self.rgba[i + 2],
-            self.rgba[i + 3],
-        ]
     }
 }
 
@@ -294,18 +184,24 @@ pub struct Scene {
     pub indices: Vec<u32>,
     pub surfaces: Vec<Surface>,
     pub materials: Vec<Material>,
-    pub textures: Vec<Image>,
-    pub lightmaps: Vec<Image>,
+    pub textures: Vec<Rgba>,
+    pub lightmaps: Vec<Rgba>,
     pub models: Vec<ModelInstance>,
     pub lights: Vec<Light>,
     pub camera: Camera,
     /// Option overrides the scene asks for (`[options]` of a scene file), as a TOML table.
     pub options: toml::Table,
     /// BSP visibility of a Quake 3 world (None for built-in scenes: everything is visible).
-    pub world: Option<std::sync::Arc<crate::q3::vis::WorldVis>>,
-    /// Shadow-volume connectivity of the casters, built on first use (see [`Scene::caster_groups`]).
-    pub caster_cache: std::sync::OnceLock<std::sync::Arc<crate::shadow::volume::CasterGroups>>,
+    pub world: Option<std::sync::Arc<vis::WorldVis>>,
+    /// Which geometry this is: a value no other scene's geometry had, taken anew whenever
+    /// surfaces are added ([`Scene::push_surface`], [`Scene::add_surface`]). Whatever is built
+    /// from the geometry (the planner's caster groups) is kept by it.
+    revision: u64,
 }
+
+/// The source of [`Scene::revision`]s: unique across scenes, so that a cache keyed by one
+/// never takes another scene's geometry for its own.
+static REVISIONS: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(1);
 
 impl Scene {
     /// Transform that takes a surface's vertices to world space.
@@ -352,6 +248,7 @@ impl Scene {
             kind,
             bounds: local.transformed(&transform),
         });
+        self.touch();
     }
 
     /// World-space triangles of every surface that casts shadows, with the surface index.
@@ -372,17 +269,20 @@ impl Scene {
         })
     }
 
-    /// Welded casters with their edges and components, built once (model transforms are applied
-    /// later, so moving a model keeps them valid; adding surfaces must call
-    /// [`Scene::invalidate_casters`]).
-    pub fn caster_groups(&self) -> std::sync::Arc<crate::shadow::volume::CasterGroups> {
-        self.caster_cache
-            .get_or_init(|| std::sync::Arc::new(crate::shadow::volume::CasterGroups::build(self)))
-            .clone()
+    /// The geometry's revision (see the field).
+    pub fn revision(&self) -> u64 {
+        self.revision
     }
 
-    pub fn invalidate_casters(&mut self) {
-        self.caster_cache = std::sync::OnceLock::new();
+    /// Appends a surface whose world bounds are already set, and takes a new revision.
+    pub fn add_surface(&mut self, surface: Surface) {
+        self.surfaces.push(surface);
+        self.touch();
+    }
+
+    /// Takes a new revision: the geometry changed.
+    fn touch(&mut self) {
+        self.revision = REVISIONS.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
     }
 
     /// Number of triangles drawn.

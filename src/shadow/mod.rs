@@ -1,6 +1,5 @@
-//! Shadow algorithms' CPU side: edge connectivity, projections and light frusta.
+//! Shadow algorithms' CPU side: edge connectivity, shadow volumes and light views.
 
 pub mod edges;
-pub mod projection;
 pub mod views;
 pub mod volume;

@@ -1,9 +1,12 @@
 //! The light's "virtual cameras" of shadow mapping (thesis 2.2.2): one frustum per spot light, six
 //! 90° frusta or one cube for an omni light, with near and far fitted to the casters.
 
-use super::projection::{bias_matrix, cube_face_view, fit_near_far, look_along, perspective};
+use crate::geometry::Aabb;
+use crate::geometry::projection::{
+    bias_matrix, cube_face_view, fit_near_far, look_along, perspective,
+};
 use crate::options::{OmniMode, ShadowMapOptions};
-use crate::scene::{Aabb, Light, LightKind};
+use crate::scene::{Light, LightKind};
 use glam::{Mat4, Vec3, Vec4};
 
 /// Smallest near plane a fitted frustum gets, in world units.

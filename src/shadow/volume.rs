@@ -12,8 +12,9 @@
 //!    extrusions as the back cap.
 
 use super::edges::Connectivity;
+use crate::geometry::Aabb;
 pub use crate::options::{EdgeRule, Extrusion};
-use crate::scene::{Aabb, Scene, SurfaceOwner};
+use crate::scene::{Scene, SurfaceOwner};
 use glam::{DVec3, Mat4, Vec3};
 use serde::Serialize;
 use std::collections::HashMap;

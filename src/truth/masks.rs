@@ -1,7 +1,7 @@
 //! Reference masks: for every pixel of a G-buffer that receives a light, the exact shadow ray.
 
 use super::reference::{Reference, shadow_ray_origin};
-use crate::frame::{GBuffer, Mask, MaskValue};
+use crate::images::{GBuffer, Mask, MaskValue};
 use crate::scene::Light;
 use glam::Vec3;
 use rayon::prelude::*;

@@ -8,7 +8,7 @@
 //! as a receiver and the other does not (cone edges, terminators, at float precision) are counted
 //! apart as `receiver_mismatch` and left out of the rates.
 
-use crate::frame::{Mask, MaskValue};
+use crate::images::{Mask, MaskValue};
 use serde::Serialize;
 
 /// Counts for one light (or summed over lights).

@@ -8,7 +8,8 @@
 //! Quake 3's ±8192), which covers the f32 rounding of G-buffer positions. This offset is the
 //! reference's only tolerance; triangles are hit exactly (Möller–Trumbore in f64, edges inclusive).
 
-use crate::scene::{AlphaFunc, Image, Scene};
+use crate::images::Rgba;
+use crate::scene::{AlphaFunc, Scene};
 use bvh::aabb::{Aabb, Bounded};
 use bvh::bounding_hierarchy::BHShape;
 use bvh::bvh::Bvh;
@@ -103,7 +104,7 @@ fn intersect(origin: DVec3, dir: DVec3, t_max: f64, v: &[DVec3; 3]) -> Option<(f
 pub struct Reference {
     bvh: Bvh<f64, 3>,
     occluders: Vec<Occluder>,
-    textures: Vec<Image>,
+    textures: Vec<Rgba>,
 }
 
 impl Reference {
@@ -116,7 +117,7 @@ impl Reference {
     /// techniques (shadow volumes) aim at, for telling which errors alpha testing alone causes.
     pub fn build_with(scene: &Scene, alpha: bool) -> Reference {
         let mut occluders = Vec::new();
-        let mut textures: Vec<Image> = Vec::new();
+        let mut textures: Vec<Rgba> = Vec::new();
         let mut texture_slot: Vec<Option<usize>> = vec![None; scene.textures.len()];
         for (surface, s) in scene.surfaces.iter().enumerate() {
             let m = &scene.materials[s.material];

@@ -1,8 +1,9 @@
 //! Scene edits the viewer makes: lights added, removed, moved and re-aimed; models moved or
 //! copied. GL-free; the caller re-uploads the scene when [`Edit::needs_upload`] says so.
 
+use crate::geometry::Aabb;
 use crate::options::Options;
-use crate::scene::{Aabb, Light, LightKind, Scene, SurfaceOwner};
+use crate::scene::{Light, LightKind, Scene, SurfaceOwner};
 use glam::{Mat4, Vec3};
 
 /// What an edit changed, for the caller's caches.
@@ -52,11 +53,10 @@ pub fn copy_model(scene: &mut Scene, m: usize, transform: Mat4) -> (usize, Edit)
         .collect();
     for mut s in copies {
         s.owner = SurfaceOwner::Model(index);
-        scene.surfaces.push(s);
+        scene.add_surface(s);
         let i = scene.surfaces.len() - 1;
         scene.surfaces[i].bounds = surface_bounds(scene, i);
     }
-    scene.invalidate_casters();
     (index, Edit { needs_upload: true })
 }
 

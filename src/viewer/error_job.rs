@@ -1,7 +1,8 @@
 //! The error view's work: exact reference masks for a frame's G-buffer, computed on a worker
 //! thread so that the window stays live, with progress (one step for the BVH, one per light).
 
-use crate::frame::{Frame, Rgba};
+use crate::frame::Frame;
+use crate::images::Rgba;
 use crate::scene::Scene;
 use crate::truth::{self, Counts, Reference, Tracing};
 use std::sync::Arc;
@@ -56,8 +57,8 @@ impl ErrorJob {
                 exact.push(e);
                 progress.fetch_add(1, Ordering::Relaxed);
             }
-            let rendered: Vec<&crate::frame::Mask> = masks.iter().collect();
-            let exact_refs: Vec<&crate::frame::Mask> = exact.iter().collect();
+            let rendered: Vec<&crate::images::Mask> = masks.iter().collect();
+            let exact_refs: Vec<&crate::images::Mask> = exact.iter().collect();
             Some(ErrorResult {
                 image: Rgba {
                     width,

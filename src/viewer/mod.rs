@@ -11,10 +11,11 @@ pub mod script;
 pub mod state;
 pub mod ui;
 
-use crate::frame::{Frame, Rgba};
+use crate::frame::Frame;
 use crate::gl::debug;
 use crate::gl::window::{WindowGl, open_window_gl};
 use crate::gl::{RenderError, Renderer};
+use crate::images::Rgba;
 use crate::options::Options;
 use crate::scene::Scene;
 use error_job::ErrorJob;

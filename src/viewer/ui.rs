@@ -434,10 +434,7 @@ fn field_changed(f: &Field, options: &crate::options::Options) -> bool {
 fn stages(frame: &Frame) -> Vec<(String, f64)> {
     let mut out: Vec<(String, f64)> = Vec::new();
     for p in &frame.passes {
-        let stage = match p.name.split_once('.') {
-            Some((l, s)) if l.starts_with("light") => s.to_string(),
-            _ => p.name.clone(),
-        };
+        let stage = p.pass.stage.name().to_string();
         match out.iter_mut().find(|(n, _)| *n == stage) {
             Some(e) => e.1 += p.ms,
             None => out.push((stage, p.ms)),
@@ -449,7 +446,11 @@ fn stages(frame: &Frame) -> Vec<(String, f64)> {
 fn timings(ui: &mut egui::Ui, state: &ViewerState, frame: &Frame) {
     let stages = stages(frame);
     let max = stages.iter().map(|s| s.1).fold(0.1, f64::max);
-    let clock = if frame.passes.iter().any(|p| p.clock == "gpu") {
+    let clock = if frame
+        .passes
+        .iter()
+        .any(|p| p.clock == crate::plan::pass::Clock::Gpu)
+    {
         "GPU timer queries"
     } else {
         "CPU time around glFinish"

@@ -93,12 +93,10 @@ pub fn scene_of(
     lights: Vec<shadowlab::scene::Light>,
     camera: shadowlab::scene::Camera,
 ) -> Scene {
-    let mut scene = Scene {
-        name: "test".into(),
-        lights,
-        camera,
-        ..Scene::default()
-    };
+    let mut scene = Scene::default();
+    scene.name = "test".into();
+    scene.lights = lights;
+    scene.camera = camera;
     for (mesh, material) in parts {
         scene.materials.push(material);
         let m = scene.materials.len() - 1;
@@ -135,7 +133,7 @@ pub struct Measurer {
     renderer: shadowlab::gl::Renderer,
     ctx: shadowlab::gl::GlContext,
     reference: shadowlab::truth::Reference,
-    exact: std::collections::HashMap<(u32, u32, usize), shadowlab::frame::Mask>,
+    exact: std::collections::HashMap<(u32, u32, usize), shadowlab::images::Mask>,
 }
 
 /// One configuration's result.
@@ -149,7 +147,7 @@ impl Measured {
     pub fn light(&self, l: usize) -> shadowlab::truth::Counts {
         self.per_light.iter().find(|(i, _)| *i == l).unwrap().1
     }
-    pub fn mask(&self, l: usize) -> &shadowlab::frame::Mask {
+    pub fn mask(&self, l: usize) -> &shadowlab::images::Mask {
         self.frame.masks.iter().find(|m| m.light == l).unwrap()
     }
 }
@@ -180,7 +178,7 @@ impl Measurer {
     }
 
     /// The exact mask of light `l` for frames of this size.
-    pub fn exact(&self, w: u32, h: u32, l: usize) -> &shadowlab::frame::Mask {
+    pub fn exact(&self, w: u32, h: u32, l: usize) -> &shadowlab::images::Mask {
         &self.exact[&(w, h, l)]
     }
 

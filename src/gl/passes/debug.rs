@@ -16,7 +16,7 @@ const SILHOUETTE: [f32; 4] = [1.0, 0.9, 0.1, 1.0];
 pub fn volumes(
     ctx: &PassContext,
     program: &Program,
-    v: &LightVolumes,
+    v: &LightVolumes<'_>,
     geometry: bool,
     silhouettes: bool,
 ) {

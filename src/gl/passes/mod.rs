@@ -24,6 +24,21 @@ pub struct PassContext<'a> {
     pub options: &'a Options,
 }
 
+/// The state every frame starts from: whoever drew last (a UI painter in the viewer) may have
+/// left state the passes do not set themselves.
+pub fn reset_state(gl: &glow::Context) {
+    // SAFETY: fixed-function state only.
+    unsafe {
+        gl.disable(glow::SCISSOR_TEST);
+        gl.disable(glow::BLEND);
+        gl.disable(glow::STENCIL_TEST);
+        gl.disable(glow::FRAMEBUFFER_SRGB);
+        gl.color_mask(true, true, true, true);
+        gl.depth_mask(true);
+        gl.pixel_store_i32(glow::UNPACK_ALIGNMENT, 4);
+    }
+}
+
 /// Face culling for a material's `cull`.
 pub fn apply_cull(gl: &glow::Context, cull: Cull) {
     // SAFETY: fixed-function state only.

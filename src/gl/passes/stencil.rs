@@ -41,7 +41,7 @@ const DEPTH_CLIP_UNIFORMS: [&str; MAX_PLANES] = [
     "u_depth_clip[3]",
 ];
 
-fn draw_parts(gl: &glow::Context, program: &Program, v: &LightVolumes, counting: Counting) {
+fn draw_parts(gl: &glow::Context, program: &Program, v: &LightVolumes<'_>, counting: Counting) {
     // SAFETY: the light's own vertex array; ranges lie inside its buffer.
     unsafe {
         gl.bind_vertex_array(Some(v.vao));
@@ -68,7 +68,7 @@ fn draw_parts(gl: &glow::Context, program: &Program, v: &LightVolumes, counting:
 pub fn draw(
     ctx: &PassContext,
     program: &Program,
-    volumes: &LightVolumes,
+    volumes: &LightVolumes<'_>,
     light_scissor: Option<Scissor>,
 ) {
     let gl = ctx.gl;

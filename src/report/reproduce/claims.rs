@@ -5,7 +5,7 @@
 
 use super::lab::{Lab, pct};
 use super::{ReproduceError, Section};
-use crate::frame::MaskValue;
+use crate::images::MaskValue;
 use crate::report::table::{Align, Table, clock_name};
 
 /// Sections [`run`] produces per scene (for the progress bar).

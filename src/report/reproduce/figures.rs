@@ -176,7 +176,7 @@ fn crops(
     let Some(last) = captures.last() else {
         return Ok(());
     };
-    let exact: Vec<&crate::frame::Mask> = last.exact.iter().collect();
+    let exact: Vec<&crate::images::Mask> = last.exact.iter().collect();
     let (x, y) = boundary_window(&exact, window.0, window.1).unwrap_or((0, 0));
     for (i, ((name, _), c)) in configs.iter().zip(&captures).enumerate() {
         let img = Lab::frame_image(c).crop_zoom(x, y, window.0, window.1, zoom);

@@ -3,9 +3,9 @@
 
 use super::{ReproduceError, Settings};
 use crate::gl::Renderer;
+use crate::images::Rgba;
 use crate::options::Options;
 use crate::report::bench::{Bench, BenchConfig, BenchRow, BenchSettings, Capture};
-use crate::report::images::Rgba;
 use crate::scene::Scene;
 use crate::scene::path::PathKey;
 use crate::truth;
@@ -132,8 +132,8 @@ impl<'a> Lab<'a> {
 
     /// Every light's errors of a capture in one image (red false shadow, blue false lit).
     pub fn error_image(capture: &Capture) -> Rgba {
-        let rendered: Vec<&crate::frame::Mask> = capture.frame.masks.iter().collect();
-        let exact: Vec<&crate::frame::Mask> = capture.exact.iter().collect();
+        let rendered: Vec<&crate::images::Mask> = capture.frame.masks.iter().collect();
+        let exact: Vec<&crate::images::Mask> = capture.exact.iter().collect();
         Rgba {
             width: capture.frame.width,
             height: capture.frame.height,

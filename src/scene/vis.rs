@@ -1,11 +1,68 @@
-//! Quake 3 visibility (paper 2.2): the camera's leaf and cluster, the potentially visible set, and
+//! BSP visibility of a Quake 3 world (paper 2.2): the camera's leaf and cluster, the potentially visible set, and
 //! frustum culling of node and leaf boxes. Each surface is drawn once however many leaves hold it.
 
-use super::bsp::{Bsp, Leaf, Node, Plane, Vis};
-use crate::plan::frustum::Frustum;
-use crate::scene::Aabb;
+use crate::geometry::Aabb;
+use crate::geometry::Frustum;
 use glam::Vec3;
 use serde::Serialize;
+
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Plane {
+    pub normal: [f32; 3],
+    pub dist: f32,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Node {
+    pub plane: u32,
+    /// ≥ 0: a node; < 0: leaf `-(child + 1)`.
+    pub children: [i32; 2],
+    pub mins: [i32; 3],
+    pub maxs: [i32; 3],
+}
+
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Leaf {
+    /// -1: outside the map (solid or void).
+    pub cluster: i32,
+    pub area: i32,
+    pub mins: [i32; 3],
+    pub maxs: [i32; 3],
+    pub first_leaf_surface: u32,
+    pub num_leaf_surfaces: u32,
+    pub first_leaf_brush: u32,
+    pub num_leaf_brushes: u32,
+}
+
+/// The potentially visible set: one bit row per cluster.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Vis {
+    pub num_clusters: u32,
+    pub cluster_bytes: u32,
+    pub data: Vec<u8>,
+}
+
+impl Vis {
+    /// Whether `to` may be seen from `from`. Clusters outside the table (e.g. -1) see nothing.
+    pub fn visible(&self, from: i32, to: i32) -> bool {
+        if from < 0 || to < 0 || from as u32 >= self.num_clusters || to as u32 >= self.num_clusters
+        {
+            return false;
+        }
+        let row = from as usize * self.cluster_bytes as usize;
+        self.data[row + (to as usize >> 3)] & (1 << (to & 7)) != 0
+    }
+}
+
+/// What a map's loader hands to [`WorldVis::new`]: the BSP tree and the PVS.
+#[derive(Debug, Clone, PartialEq)]
+pub struct BspTree {
+    pub planes: Vec<Plane>,
+    pub nodes: Vec<Node>,
+    pub leafs: Vec<Leaf>,
+    pub leaf_surfaces: Vec<u32>,
+    pub vis: Option<Vis>,
+}
 
 /// The parts of a map that visibility needs, with BSP surfaces mapped to scene surfaces.
 #[derive(Debug, Clone)]
@@ -39,13 +96,22 @@ fn ibox(mins: [i32; 3], maxs: [i32; 3]) -> Aabb {
 }
 
 impl WorldVis {
-    pub fn new(bsp: &Bsp, surface_map: Vec<Option<u32>>) -> WorldVis {
+    /// The map's BSP tree, leaves and PVS, with `surface_map` taking BSP surfaces to scene
+    /// surfaces.
+    pub fn new(tree: BspTree, surface_map: Vec<Option<u32>>) -> WorldVis {
+        let BspTree {
+            planes,
+            nodes,
+            leafs,
+            leaf_surfaces,
+            vis,
+        } = tree;
         WorldVis {
-            planes: bsp.planes.clone(),
-            nodes: bsp.nodes.clone(),
-            leafs: bsp.leafs.clone(),
-            leaf_surfaces: bsp.leaf_surfaces.clone(),
-            vis: bsp.vis.clone(),
+            planes,
+            nodes,
+            leafs,
+            leaf_surfaces,
+            vis,
             surface_map,
         }
     }

@@ -1,6 +1,6 @@
 //! View frusta as planes, for culling boxes (BSP nodes and leaves, surfaces, light bounds).
 
-use crate::scene::Aabb;
+use crate::geometry::Aabb;
 use glam::{Mat4, Vec3, Vec4};
 
 /// Planes `(n, d)` with `n·p + d ≥ 0` inside. An infinite projection has no far plane, so only
@@ -44,7 +44,7 @@ impl Frustum {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::shadow::projection::{perspective, perspective_infinite};
+    use crate::geometry::projection::{perspective, perspective_infinite};
 
     #[test]
     fn boxes_in_front_pass_and_behind_or_beside_fail() {

@@ -1,0 +1,9 @@
+//! Geometry every layer shares, free of scene data and GL: boxes, frusta and projection
+//! matrices.
+
+pub mod aabb;
+pub mod frustum;
+pub mod projection;
+
+pub use aabb::Aabb;
+pub use frustum::Frustum;

@@ -1,0 +1,205 @@
+//! The planner: every per-frame decision, and the caches they are made from. The GL layer asks
+//! it for a frame's [`Plan`], reads back the depth it asks for, and draws the volume draws it
+//! prepares; it keeps nothing of its own that changes what is drawn.
+//!
+//! Caches are keyed by what they are made from: the caster groups by the scene's revision
+//! (which every change to its surfaces bumps), the depth by what the base pass draws it from,
+//! the volume draws by their inputs.
+
+use super::Plan;
+use super::auto::CostMemory;
+use super::occlusion::DepthPyramid;
+use super::pass::PassTime;
+use super::volume_draws::{LightVolumeDraws, PieceChoices, VolumeDrawError, VolumePlanner};
+use super::{CameraSetup, LightPlan};
+use crate::options::{Options, Technique};
+use crate::scene::{Camera, Scene};
+use crate::shadow::volume::CasterGroups;
+use std::sync::Arc;
+
+/// Everything the base pass's depth is drawn from, so that a frame with the same as the last
+/// one has the same depth without reading it back (`plan.reuse_depth`): the camera (view,
+/// projection, size), which surfaces are drawn, where the models stand, the depth format and
+/// the form it is read in. Materials, textures and geometry are the loaded scene's, which a
+/// new scene replaces together with the depth kept ([`Planner::forget`]).
+#[derive(Debug, Clone, PartialEq)]
+struct DepthInputs {
+    camera: CameraSetup,
+    visible: Vec<bool>,
+    models: Vec<glam::Mat4>,
+    float_depth: bool,
+    reduced: bool,
+}
+
+/// What the planner needs of the frame's depth after the base pass.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum DepthNeed {
+    /// Nothing: no light's volumes read it this frame.
+    None,
+    /// The last depth read holds: the base pass drew the same (`plan.reuse_depth`).
+    Reuse,
+    /// Read it back, reduced to 4×4 block maxima by a shader when `reduced`
+    /// (`plan.reduce_depth`), and hand it to [`Planner::take_depth`].
+    Read { reduced: bool },
+}
+
+/// The depth read for the planner, and which depth it is.
+#[derive(Default)]
+struct DepthMemory {
+    last: Option<DepthPyramid>,
+    /// What `last` was drawn from.
+    inputs: Option<DepthInputs>,
+    /// Advanced whenever the depth read differs from the last (see
+    /// `PieceChoices::depth_generation`).
+    generation: u64,
+    /// This frame's inputs, until the depth is taken.
+    pending: Option<DepthInputs>,
+    /// Whether this frame's volumes may read `last`.
+    usable: bool,
+}
+
+/// The planner's state across frames.
+#[derive(Default)]
+pub struct Planner {
+    costs: CostMemory,
+    /// The scene's caster groups and the revision they were built from.
+    casters: Option<(u64, Arc<CasterGroups>)>,
+    volumes: VolumePlanner,
+    depth: DepthMemory,
+}
+
+impl Planner {
+    /// Forgets everything learnt from the last scene.
+    pub fn forget(&mut self) {
+        *self = Planner::default();
+    }
+
+    /// What `technique = auto` has measured so far.
+    pub fn costs(&self) -> &CostMemory {
+        &self.costs
+    }
+
+    /// Learns from a frame's pass times, for `technique = auto`.
+    pub fn record_costs(&mut self, plan: &Plan, passes: &[PassTime]) {
+        let ran: Vec<(usize, Technique)> =
+            plan.lights.iter().map(|l| (l.light, l.technique)).collect();
+        self.costs.record(passes, &ran);
+    }
+
+    /// The scene's caster groups, built again only when its surfaces changed.
+    pub fn casters(&mut self, scene: &Scene) -> Arc<CasterGroups> {
+        match &self.casters {
+            Some((revision, groups)) if *revision == scene.revision() => groups.clone(),
+            _ => {
+                let groups = Arc::new(CasterGroups::build(scene));
+                self.casters = Some((scene.revision(), groups.clone()));
+                groups
+            }
+        }
+    }
+
+    /// The plan for `camera`, with the costs measured so far.
+    pub fn plan(&mut self, scene: &Scene, camera: &Camera, options: &Options) -> Plan {
+        let groups = Plan::needs_casters(scene, options).then(|| self.casters(scene));
+        Plan::build_with(scene, camera, options, &self.costs, groups.as_deref())
+    }
+
+    /// What this frame needs of the depth the base pass lays down; `float_depth` says the
+    /// frame's depth buffer is 32F.
+    pub fn depth_need(
+        &mut self,
+        scene: &Scene,
+        plan: &Plan,
+        options: &Options,
+        float_depth: bool,
+    ) -> DepthNeed {
+        let any_volumes = plan
+            .lights
+            .iter()
+            .any(|l| l.technique == Technique::ShadowVolume);
+        let reads_depth = options.plan.occlusion || options.plan.depth_clip;
+        self.depth.usable = false;
+        self.depth.pending = None;
+        if !(any_volumes && options.plan.enabled && reads_depth) {
+            return DepthNeed::None;
+        }
+        let inputs = DepthInputs {
+            camera: plan.camera,
+            visible: plan.visible.clone(),
+            models: scene.models.iter().map(|m| m.transform).collect(),
+            float_depth,
+            reduced: options.plan.reduce_depth,
+        };
+        // The base pass draws what the last depth read was drawn from: it is that depth.
+        if options.plan.reuse_depth
+            && self.depth.last.is_some()
+            && self.depth.inputs.as_ref() == Some(&inputs)
+        {
+            self.depth.usable = true;
+            self.volumes.begin_frame(options.plan.reuse_depth_fits);
+            return DepthNeed::Reuse;
+        }
+        self.depth.pending = Some(inputs);
+        DepthNeed::Read {
+            reduced: options.plan.reduce_depth,
+        }
+    }
+
+    /// The depth read back after [`DepthNeed::Read`] (None: it could not be read; the volumes
+    /// are then drawn without it, and the last depth stays).
+    pub fn take_depth(&mut self, depth: Option<DepthPyramid>, options: &Options) {
+        let Some(depth) = depth else {
+            return;
+        };
+        let same = self
+            .depth
+            .last
+            .as_ref()
+            .is_some_and(|last| depth.same_as(last));
+        // The fits kept are those made for the last depth.
+        self.volumes
+            .begin_frame(same && options.plan.reuse_depth_fits);
+        if !same {
+            self.depth.generation += 1;
+        }
+        self.depth.last = Some(depth);
+        self.depth.inputs = self.depth.pending.take();
+        self.depth.usable = true;
+    }
+
+    /// The light's volume draws for this frame (after the depth, if asked for, was taken).
+    pub fn volume_draws(
+        &mut self,
+        scene: &Scene,
+        plan: &Plan,
+        lp: &LightPlan,
+        options: &Options,
+    ) -> Result<&LightVolumeDraws, VolumeDrawError> {
+        let groups = self.casters(scene);
+        let p = &options.plan;
+        let choices = PieceChoices {
+            camera: &plan.camera,
+            depth: self.depth.last.as_ref().filter(|_| self.depth.usable),
+            occlusion: p.occlusion,
+            depth_clip: if p.depth_clip {
+                p.depth_clip_planes as usize
+            } else {
+                0
+            },
+            scissor: p.enabled && p.piece_scissor,
+            merge: p.enabled && p.merge_pieces,
+            cull_clipped: p.enabled && p.cull_clipped,
+            reuse_fits: p.reuse_depth_fits,
+            reuse_draws: p.enabled && p.reuse_volume_draws,
+            depth_generation: self.depth.generation,
+            truncate: p.enabled && p.truncate_volumes,
+        };
+        self.volumes
+            .prepare(scene, &groups, lp, &options.shadow_volume, choices)
+    }
+
+    /// The light's volume draws as last prepared.
+    pub fn last_volume_draws(&self, light: usize) -> Option<&LightVolumeDraws> {
+        self.volumes.get(light)
+    }
+}
