@@ -1,0 +1,690 @@
+//! How a [`Plan`] is built, step by step: the camera, what is visible, the frame's casters and
+//! receivers, then each enabled light: culled, or given a technique and its shadow work.
+
+use super::auto::{self, CostMemory};
+use super::scissor::{self, Scissor};
+use super::{CameraSetup, LightPlan, PartTriangles, Plan, PlanStats, VolumePart, cull};
+use crate::geometry::{Aabb, Frustum};
+use crate::options::{
+    CountingMode, OmniMode, Options, Outside, ShadowMapOptions, StencilPasses, Technique,
+    VolumeProjection,
+};
+use crate::scene::{Camera, Light, Scene, SurfaceOwner};
+use crate::shadow::views::{ViewKind, shadow_views};
+use crate::shadow::volume::{self, CasterGroup, CasterGroups, Counting};
+use glam::{Mat4, Vec3};
+
+/// A hash of anything hashable.
+fn hash_of(v: impl std::hash::Hash) -> u64 {
+    use std::hash::Hasher;
+    let mut h = std::collections::hash_map::DefaultHasher::new();
+    v.hash(&mut h);
+    h.finish()
+}
+
+fn mat_bits(m: &Mat4) -> [u32; 16] {
+    m.to_cols_array().map(f32::to_bits)
+}
+
+/// One caster piece the planner may extrude: its group's index, its index among the group's
+/// chunks (or components in the paper's frame), its world bounds and its group.
+type PieceCandidate<'a> = (usize, usize, Aabb, &'a CasterGroup);
+
+/// What is known of the frame before any light is planned.
+struct FrameFacts<'a> {
+    scene: &'a Scene,
+    options: &'a Options,
+    memory: &'a CostMemory,
+    camera: CameraSetup,
+    /// The camera frustum without a far plane: volumes reach infinity.
+    view_frustum: Frustum,
+    near: f32,
+    /// Where depth-pass counts start (`plan.near_plane_test`).
+    near_quad: [Vec3; 4],
+    /// BSP leaves in view (Quake 3 worlds).
+    leaves: Vec<Aabb>,
+    receivers_in_view: Vec<u32>,
+    caster_list: Vec<u32>,
+    /// Alpha-tested casters: `auto` and the counting choice treat them apart.
+    alpha_caster_bounds: Vec<Aabb>,
+    /// Casters' bounds, for fitting shadow-map views.
+    caster_bounds: Vec<Aabb>,
+    /// Shadow-volume pieces with their world bounds.
+    pieces: Vec<PieceCandidate<'a>>,
+    /// Pieces are chunks (the planner culls them) rather than whole components.
+    chunked: bool,
+    map_options: ShadowMapOptions,
+    map_options_text: String,
+}
+
+impl Plan {
+    /// The plan for `camera`, with the costs measured so far (for `technique = auto`) and the
+    /// scene's caster groups (needed when [`Plan::needs_casters`]; without them no light
+    /// gets volumes).
+    pub fn build_with(
+        scene: &Scene,
+        camera: &Camera,
+        options: &Options,
+        memory: &CostMemory,
+        groups: Option<&CasterGroups>,
+    ) -> Plan {
+        let camera_setup = camera_for(scene, camera, options);
+        let mut stats = PlanStats {
+            surfaces: scene.surfaces.len(),
+            ..PlanStats::default()
+        };
+        let (visible, leaves) = visibility(scene, &camera_setup, options, &mut stats);
+        let casters: Vec<bool> = scene
+            .surfaces
+            .iter()
+            .map(|s| {
+                let m = &scene.materials[s.material];
+                m.visible && m.casts_shadows
+            })
+            .collect();
+        let facts = FrameFacts::new(
+            scene,
+            (camera, camera_setup),
+            options,
+            memory,
+            (&visible, &casters, leaves),
+            groups,
+        );
+        let (lights, culled, scissor_sum) = facts.plan_lights(&mut stats);
+        stats.lights_planned = lights.len();
+        stats.scissor_fraction = if lights.is_empty() {
+            0.0
+        } else {
+            scissor_sum / lights.len() as f64
+        };
+        let p = &options.plan;
+        let stencil = if p.enabled && p.one_pass_stencil {
+            StencilPasses::Separate
+        } else {
+            options.shadow_volume.stencil
+        };
+        stats.stencil_passes = match stencil {
+            StencilPasses::TwoPass => 2,
+            StencilPasses::Separate => 1,
+        };
+        Plan {
+            camera: camera_setup,
+            visible,
+            casters,
+            lights,
+            stencil,
+            culled,
+            stats,
+        }
+    }
+}
+
+/// The camera with the projection the frame's techniques need: the shadow-volume choice
+/// (with a far plane past the whole scene for depth clamping) where some light may use
+/// volumes, the paper's infinite far plane otherwise.
+fn camera_for(scene: &Scene, camera: &Camera, options: &Options) -> CameraSetup {
+    if !Plan::needs_casters(scene, options) {
+        return CameraSetup::new(camera, options.width, options.height);
+    }
+    let far = scene
+        .bounds()
+        .corners()
+        .iter()
+        .map(|c| c.distance(camera.position))
+        .fold(0.0f32, f32::max)
+        * 1.01;
+    CameraSetup::with_projection(
+        camera,
+        options.width,
+        options.height,
+        options.shadow_volume.projection,
+        far,
+    )
+}
+
+/// Per surface, whether camera passes draw it (the PVS and frustum tests of the paper's base
+/// renderer for Quake 3 worlds; the frustum for models), and the BSP leaves in view.
+fn visibility(
+    scene: &Scene,
+    camera: &CameraSetup,
+    options: &Options,
+    stats: &mut PlanStats,
+) -> (Vec<bool>, Vec<Aabb>) {
+    let frustum = options
+        .culling
+        .frustum
+        .then(|| Frustum::from_view_proj(&camera.view_proj));
+    let mut visible = vec![false; scene.surfaces.len()];
+    let mut leaves: Vec<Aabb> = Vec::new();
+    match &scene.world {
+        Some(world) => {
+            stats.vis = Some(world.mark_visible(
+                camera.position,
+                frustum.as_ref(),
+                options.culling.pvs,
+                &mut visible,
+                &mut leaves,
+            ));
+        }
+        None => visible.iter_mut().for_each(|v| *v = true),
+    }
+    for (i, s) in scene.surfaces.iter().enumerate() {
+        if let SurfaceOwner::Model(_) = s.owner {
+            visible[i] = frustum
+                .as_ref()
+                .is_none_or(|f| f.intersects_aabb(&s.bounds));
+        }
+        visible[i] &= scene.materials[s.material].visible;
+        if visible[i] {
+            stats.surfaces_visible += 1;
+            stats.triangles_visible += s.index_count as usize / 3;
+        }
+    }
+    (visible, leaves)
+}
+
+/// The shadow-map options the planner draws with: under `plan.omni_cube`, where six spots and
+/// a cube cover the same directions (no narrowed field of view, no clip planes), an omni
+/// light's maps are the faces of one cube map.
+fn map_options_of(options: &Options) -> ShadowMapOptions {
+    let sm = &options.shadow_map;
+    let p = &options.plan;
+    if p.enabled
+        && p.omni_cube
+        && sm.omni == OmniMode::SixSpots
+        && sm.fov_scale == 1.0
+        && sm.outside != Outside::ClipPlanes
+    {
+        ShadowMapOptions {
+            omni: OmniMode::Cube,
+            ..sm.clone()
+        }
+    } else {
+        sm.clone()
+    }
+}
+
+/// The near plane's rectangle in world space, grown by a tenth about its centre against
+/// rounding in the rasteriser's clipping; under depth clamping nothing is near-clipped, so
+/// counts start at the eye.
+fn near_quad_of(camera: &CameraSetup, options: &Options) -> [Vec3; 4] {
+    if options.shadow_volume.projection == VolumeProjection::DepthClamp {
+        return [camera.position; 4];
+    }
+    let inv = camera.view_proj.inverse();
+    [(-1.0, -1.0), (1.0, -1.0), (1.0, 1.0), (-1.0, 1.0)]
+        .map(|(x, y)| inv.project_point3(Vec3::new(x * 1.1, y * 1.1, -1.0)))
+}
+
+impl<'a> FrameFacts<'a> {
+    /// `(camera, setup)`: the scene camera and its setup; `(visible, casters, leaves)`: per
+    /// surface drawn and casting, and the BSP leaves in view.
+    fn new(
+        scene: &'a Scene,
+        (camera, setup): (&Camera, CameraSetup),
+        options: &'a Options,
+        memory: &'a CostMemory,
+        (visible, casters, leaves): (&[bool], &[bool], Vec<Aabb>),
+        groups: Option<&'a CasterGroups>,
+    ) -> FrameFacts<'a> {
+        let n = scene.lights.len();
+        let maps_possible =
+            options.uses(n, Technique::ShadowMap) || options.uses(n, Technique::Auto);
+        let caster_list: Vec<u32> = (0..casters.len())
+            .filter(|&i| casters[i])
+            .map(|i| i as u32)
+            .collect();
+        let alpha_caster_bounds: Vec<Aabb> = caster_list
+            .iter()
+            .map(|&c| &scene.surfaces[c as usize])
+            .filter(|s| scene.materials[s.material].alpha_test.is_some())
+            .map(|s| s.bounds)
+            .collect();
+        let caster_bounds: Vec<Aabb> = if maps_possible {
+            caster_list
+                .iter()
+                .map(|&i| scene.surfaces[i as usize].bounds)
+                .collect()
+        } else {
+            Vec::new()
+        };
+        let receivers_in_view: Vec<u32> = (0..visible.len())
+            .filter(|&i| visible[i] && scene.materials[scene.surfaces[i].material].receives_light)
+            .map(|i| i as u32)
+            .collect();
+        // The planner culls pieces of at most CHUNK_TRIANGLES; the paper's frame, components.
+        let chunked = options.plan.enabled && options.plan.cull_casters;
+        let groups = groups.filter(|_| Plan::needs_casters(scene, options));
+        let pieces: Vec<PieceCandidate> = groups
+            .iter()
+            .flat_map(|g| g.groups.iter().enumerate())
+            .flat_map(|(gi, g)| {
+                let t = volume::group_transform(scene, g.owner);
+                let pieces = if chunked { &g.chunks } else { &g.components };
+                pieces
+                    .iter()
+                    .enumerate()
+                    .map(move |(ci, c)| (gi, ci, c.bounds.transformed(&t), g))
+            })
+            .collect();
+        let map_options = map_options_of(options);
+        FrameFacts {
+            scene,
+            options,
+            memory,
+            view_frustum: Frustum::from_view_proj(
+                &CameraSetup::new(camera, options.width, options.height).view_proj,
+            ),
+            near: camera.near,
+            near_quad: near_quad_of(&setup, options),
+            camera: setup,
+            leaves,
+            receivers_in_view,
+            caster_list,
+            alpha_caster_bounds,
+            caster_bounds,
+            pieces,
+            chunked,
+            map_options_text: format!("{map_options:?}"),
+            map_options,
+        }
+    }
+
+    /// Whether the planner's decisions are on (`plan.enabled`).
+    fn on(&self) -> bool {
+        self.options.plan.enabled
+    }
+
+    /// Every enabled light planned or culled: the plans, the culled lights and the sum of the
+    /// planned lights' scissor shares of the screen.
+    fn plan_lights(&self, stats: &mut PlanStats) -> (Vec<LightPlan>, Vec<usize>, f64) {
+        let n = self.scene.lights.len();
+        let screen = (self.camera.width as f64 * self.camera.height as f64).max(1.0);
+        let mut lights = Vec::new();
+        let mut culled = Vec::new();
+        let mut scissor_sum = 0.0;
+        let enabled: Vec<usize> = (0..n).filter(|&i| self.options.light_enabled(i)).collect();
+        stats.lights_enabled = enabled.len();
+        for (order, &index) in enabled.iter().enumerate() {
+            let Some(plan) = self.plan_light(index, order, stats) else {
+                culled.push(index);
+                continue;
+            };
+            scissor_sum += plan.scissor.map_or(1.0, |s| s.area() as f64 / screen);
+            lights.push(plan);
+        }
+        (lights, culled, scissor_sum)
+    }
+
+    /// Light `index`'s work this frame, or None when it is culled.
+    fn plan_light(&self, index: usize, order: usize, stats: &mut PlanStats) -> Option<LightPlan> {
+        let (receivers, scissor) = self.cull_light(index, stats)?;
+        let (technique, reason) = self.technique_of(index, stats);
+        let mut plan = LightPlan {
+            light: index,
+            technique,
+            order,
+            views: Vec::new(),
+            volumes: Vec::new(),
+            receivers,
+            view_receivers: Vec::new(),
+            view_casters: Vec::new(),
+            view_keys: Vec::new(),
+            scissor,
+            view_scissors: Vec::new(),
+            merged: false,
+            volume_receivers: Vec::new(),
+            near_plane_triangles: Vec::new(),
+            reason,
+        };
+        let left_without = match technique {
+            Technique::ShadowMap => self.plan_maps(&mut plan, stats),
+            Technique::ShadowVolume => self.plan_volumes(&mut plan, stats),
+            _ => None,
+        };
+        if let Some(why) = left_without {
+            plan.technique = Technique::None;
+            plan.reason = why.into();
+        }
+        if plan.technique == Technique::None && !plan.reason.is_empty() {
+            stats.lights_without_casters += 1;
+        }
+        stats.receivers_drawn += match plan.technique {
+            Technique::ShadowMap if !plan.merged => plan.view_receivers.iter().map(Vec::len).sum(),
+            _ => plan.receivers.len(),
+        };
+        Some(plan)
+    }
+
+    /// Light culling: the view frustum, then the visible leaves and receivers, then the
+    /// screen rectangle. The light's receivers in view and its rectangle, or None: culled.
+    fn cull_light(
+        &self,
+        index: usize,
+        stats: &mut PlanStats,
+    ) -> Option<(Vec<u32>, Option<Scissor>)> {
+        let scene = self.scene;
+        let p = &self.options.plan;
+        let on = self.on();
+        let l = &scene.lights[index];
+        let (pos, radius) = (l.position, l.radius);
+        if on && p.cull_lights && !cull::sphere_meets_frustum(&self.view_frustum, pos, radius) {
+            stats.lights_culled_frustum += 1;
+            return None;
+        }
+        let receivers: Vec<u32> = if on && p.cull_receivers {
+            self.receivers_in_view
+                .iter()
+                .copied()
+                .filter(|&s| {
+                    cull::sphere_meets_aabb(pos, radius, &scene.surfaces[s as usize].bounds)
+                })
+                .collect()
+        } else {
+            self.receivers_in_view.clone()
+        };
+        stats.receivers_culled += self.receivers_in_view.len() - receivers.len();
+        let reaches_leaf = scene.world.is_none()
+            || self
+                .leaves
+                .iter()
+                .any(|b| cull::sphere_meets_aabb(pos, radius, b))
+            || receivers
+                .iter()
+                .any(|&s| matches!(scene.surfaces[s as usize].owner, SurfaceOwner::Model(_)));
+        let reaches_receiver = !p.cull_receivers || !receivers.is_empty();
+        if on && p.cull_lights && !(reaches_leaf && reaches_receiver) {
+            stats.lights_culled_pvs += 1;
+            return None;
+        }
+        if !(on && p.scissor) {
+            return Some((receivers, None));
+        }
+        match scissor::sphere_scissor(&self.camera, pos, radius) {
+            Some(s) => Some((receivers, Some(s))),
+            None => {
+                stats.lights_culled_frustum += 1;
+                None
+            }
+        }
+    }
+
+    /// The technique light `index` runs with: asked for, or chosen by `auto` (and why).
+    fn technique_of(&self, index: usize, stats: &mut PlanStats) -> (Technique, String) {
+        match self.options.technique_for(index) {
+            Technique::Auto => {
+                let l = &self.scene.lights[index];
+                let alpha_casters = self
+                    .alpha_caster_bounds
+                    .iter()
+                    .any(|b| cull::sphere_meets_aabb(l.position, l.radius, b));
+                let c = auto::choose(index, self.options, self.memory, alpha_casters);
+                stats
+                    .choices
+                    .push(format!("light {index}: {} ({})", c.technique, c.reason));
+                (c.technique, c.reason)
+            }
+            t => (t, String::new()),
+        }
+    }
+}
+
+impl FrameFacts<'_> {
+    /// A shadow-mapped light's views, with per view the casters drawn, the receivers lit, the
+    /// key its map is kept by and its rectangle. Some(why) when no view has a caster.
+    fn plan_maps(&self, plan: &mut LightPlan, stats: &mut PlanStats) -> Option<&'static str> {
+        let l = &self.scene.lights[plan.light];
+        let p = &self.options.plan;
+        let on = self.on();
+        plan.views = shadow_views(l, &self.caster_bounds, &self.map_options);
+        let light_key = hash_of((
+            &self.map_options_text,
+            plan.order,
+            mat_bits(&Mat4::from_translation(l.position)),
+            l.radius.to_bits(),
+            format!("{:?}", l.kind),
+        ));
+        for vi in 0..plan.views.len() {
+            let view = &plan.views[vi];
+            let drawn = self.map_casters(l, view.kind, &view.view_proj());
+            stats.casters_drawn += drawn.len();
+            stats.casters_culled += self.caster_list.len() - drawn.len();
+            let lit: Vec<u32> = match view.kind {
+                ViewKind::Face(f) if on && p.cull_receivers => {
+                    let pyramid = cull::face_pyramid(l.position, f);
+                    plan.receivers
+                        .iter()
+                        .copied()
+                        .filter(|&s| {
+                            pyramid.intersects_aabb(&self.scene.surfaces[s as usize].bounds)
+                        })
+                        .collect()
+                }
+                _ => plan.receivers.clone(),
+            };
+            let key = (on && p.cache_maps).then(|| self.map_key(light_key, view, &drawn));
+            let rect = self.face_rect(l, view.kind, plan.scissor);
+            plan.view_receivers.push(lit);
+            plan.view_casters.push(drawn);
+            plan.view_keys.push(key);
+            plan.view_scissors.push(rect);
+        }
+        plan.merged = on
+            && p.merge_faces
+            && self.options.shadow_map.outside != Outside::ClipPlanes
+            && plan.views.len() == 6
+            && plan
+                .views
+                .iter()
+                .all(|v| matches!(v.kind, ViewKind::Face(_)));
+        if on && p.cull_lights && plan.view_casters.iter().all(|c| c.is_empty()) {
+            plan.views.clear();
+            plan.view_receivers.clear();
+            plan.view_casters.clear();
+            plan.view_keys.clear();
+            plan.view_scissors.clear();
+            return Some("no caster in range");
+        }
+        None
+    }
+
+    /// The casters one view of light `l` draws: those in its range and view frustum.
+    fn map_casters(&self, l: &Light, kind: ViewKind, view_proj: &Mat4) -> Vec<u32> {
+        if !(self.on() && self.options.plan.cull_casters) {
+            return self.caster_list.clone();
+        }
+        let view_frustum = (kind != ViewKind::Cube).then(|| Frustum::from_view_proj(view_proj));
+        self.caster_list
+            .iter()
+            .copied()
+            .filter(|&c| {
+                let b = &self.scene.surfaces[c as usize].bounds;
+                cull::sphere_meets_aabb(l.position, l.radius, b)
+                    && view_frustum.as_ref().is_none_or(|f| f.intersects_aabb(b))
+            })
+            .collect()
+    }
+
+    /// What a view's map depends on (a map drawn with the same key is reused): the light and
+    /// map options, the view, the casters drawn and where the moving ones stand.
+    fn map_key(
+        &self,
+        light_key: u64,
+        view: &crate::shadow::views::ShadowView,
+        drawn: &[u32],
+    ) -> u64 {
+        let moving: Vec<[u32; 16]> = drawn
+            .iter()
+            .filter_map(|&c| match self.scene.surfaces[c as usize].owner {
+                SurfaceOwner::Model(m) => Some(mat_bits(&self.scene.models[m].transform)),
+                SurfaceOwner::World => None,
+            })
+            .collect();
+        hash_of((
+            light_key,
+            mat_bits(&view.view_proj()),
+            format!("{:?}", view.kind),
+            drawn,
+            moving,
+        ))
+    }
+
+    /// Where a view's lit pass may draw: an omni light's six spots get the face's part of the
+    /// light's rectangle; other views the light's rectangle.
+    fn face_rect(&self, l: &Light, kind: ViewKind, light_rect: Option<Scissor>) -> Option<Scissor> {
+        match (kind, light_rect) {
+            (ViewKind::Face(f), Some(light_rect)) => Some(
+                scissor::face_scissor(&self.camera, l.position, l.radius, f).map_or(
+                    Scissor {
+                        width: 0,
+                        height: 0,
+                        ..light_rect
+                    },
+                    |r| r.intersect(&light_rect),
+                ),
+            ),
+            _ => light_rect,
+        }
+    }
+
+    /// A shadow-volume light's parts: each piece whose shadow may reach a receiver in view,
+    /// with its counting. Some(why) when none is left.
+    fn plan_volumes(&self, plan: &mut LightPlan, stats: &mut PlanStats) -> Option<&'static str> {
+        let p = &self.options.plan;
+        let on = self.on();
+        let l = &self.scene.lights[plan.light];
+        // Receiver boxes: a piece whose shadow meets none of them shadows nothing in view
+        // (Forsyth).
+        let receiver_boxes: Vec<Aabb> = plan
+            .receivers
+            .iter()
+            .map(|&r| self.scene.surfaces[r as usize].bounds)
+            .collect();
+        for &(group, component, bounds, g) in &self.pieces {
+            let keep = !(on && p.cull_casters) || {
+                let shadow = cull::shadow_bounds(&bounds, l.position, l.radius);
+                cull::sphere_meets_aabb(l.position, l.radius, &bounds)
+                    && self.view_frustum.intersects_aabb(&shadow)
+                    && receiver_boxes.iter().any(|r| r.intersects(&shadow))
+            };
+            if !keep {
+                stats.casters_culled += 1;
+                continue;
+            }
+            stats.casters_drawn += 1;
+            let part = |counting, triangles| VolumePart {
+                group,
+                component,
+                chunked: self.chunked,
+                counting,
+                triangles,
+            };
+            match self.counting_of(plan, g, component, &bounds) {
+                Some(counting) => {
+                    match counting {
+                        Counting::ZFail => stats.zfail_parts += 1,
+                        Counting::ZPass => stats.zpass_parts += 1,
+                    }
+                    plan.volumes.push(part(counting, PartTriangles::All));
+                }
+                None => {
+                    let i = plan.near_plane_triangles.len() - 1;
+                    stats.split_parts += 1;
+                    stats.zfail_parts += 1;
+                    stats.zpass_parts += 1;
+                    plan.volumes
+                        .push(part(Counting::ZFail, PartTriangles::NearPlane(i)));
+                    plan.volumes
+                        .push(part(Counting::ZPass, PartTriangles::Rest(i)));
+                }
+            }
+        }
+        if on && p.cull_casters {
+            plan.volume_receivers = receiver_boxes;
+        }
+        if on && p.cull_lights && plan.volumes.is_empty() {
+            return Some("no caster whose shadow reaches the view");
+        }
+        None
+    }
+
+    /// How a piece's volume is counted. The planner turns depth-fail into a per-piece choice
+    /// (`plan.counting`); a depth-pass asked for stays. None: the piece is depth-fail only for
+    /// its triangles near the near plane, which are split off (`plan.split_counting`; their
+    /// list is pushed to `plan.near_plane_triangles`).
+    fn counting_of(
+        &self,
+        plan: &mut LightPlan,
+        g: &CasterGroup,
+        component: usize,
+        bounds: &Aabb,
+    ) -> Option<Counting> {
+        let p = &self.options.plan;
+        let on = self.on();
+        let counting_auto = match self.options.shadow_volume.counting {
+            CountingMode::Auto => true,
+            CountingMode::Zfail => on && p.counting,
+            CountingMode::Zpass => false,
+        };
+        if !counting_auto {
+            return Some(match self.options.shadow_volume.counting {
+                CountingMode::Zpass => Counting::ZPass,
+                _ => Counting::ZFail,
+            });
+        }
+        // A ray seen through an alpha-tested caster's holes enters its volume through the
+        // front cap, which depth-pass does not draw.
+        let alpha = g.piece(component, self.chunked).alpha_tested;
+        let pos = self.scene.lights[plan.light].position;
+        let boxed = volume::potentially_inside_shadow(bounds, self.camera.position, pos, self.near);
+        match (alpha, boxed, on && p.near_plane_test) {
+            (true, _, _) => Some(Counting::ZFail),
+            (false, false, _) => Some(Counting::ZPass),
+            (false, true, false) => Some(Counting::ZFail),
+            (false, true, true) => {
+                let near_tris = near_plane_triangles(
+                    self.scene,
+                    g,
+                    (component, self.chunked),
+                    pos,
+                    &self.near_quad,
+                    self.options.shadow_volume.facing_epsilon,
+                );
+                if near_tris.is_empty() {
+                    Some(Counting::ZPass)
+                } else if p.split_counting {
+                    plan.near_plane_triangles.push(near_tris);
+                    None
+                } else {
+                    Some(Counting::ZFail)
+                }
+            }
+        }
+    }
+}
+
+/// `plan.near_plane_test` for one piece (a chunk, or a component when not `chunked`) of caster
+/// group `g`: its facing triangles whose shadow from a light at `light` may hold part of the
+/// camera's near-plane rectangle `near_quad` (world space), tested in the group's own space;
+/// sorted.
+fn near_plane_triangles(
+    scene: &Scene,
+    g: &CasterGroup,
+    (index, chunked): (usize, bool),
+    light: Vec3,
+    near_quad: &[Vec3; 4],
+    facing_epsilon: f32,
+) -> Vec<u32> {
+    let to_local = volume::group_transform(scene, g.owner).inverse();
+    let mut near: Vec<u32> = volume::near_plane_triangles(
+        g,
+        g.piece(index, chunked),
+        to_local.transform_point3(light).as_dvec3(),
+        &near_quad.map(|q| to_local.transform_point3(q).as_dvec3()),
+        facing_epsilon,
+    )
+    .collect();
+    // Sorted once here: both parts of the split look triangles up in it.
+    near.sort_unstable();
+    near
+}
