@@ -21,7 +21,7 @@ enum Command {
     Info(commands::info::Args),
     /// Render one frame headless to a PNG.
     Render(commands::render::Args),
-    /// List every option: key, type, default (the paper's choice) and meaning.
+    /// List every option: key, type, default and meaning.
     Options(commands::options::Args),
     /// Print what a Quake 3 map holds, as JSON.
     Inspect(commands::inspect::Args),

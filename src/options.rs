@@ -1,8 +1,11 @@
 //! Every pipeline choice of shadowlab, in one place.
 //!
-//! Each option is one field with a one-line meaning and, as its default, the choice the paper
-//! (Arneson, "Real-Time Shadows") or the thesis (Sindholt 2005) made. The same keys are set from the
-//! command line (`--set key=value`), from scene files (`[options]`), by bench sweeps and by the
+//! Each option is one field with a one-line meaning. The fixed-function choices default to
+//! what the paper (Arneson, "Real-Time Shadows") or the thesis (Sindholt 2005) chose; two
+//! defaults are not the paper's, so that a plain run shows shadows and runs fast: `technique =
+//! auto` (the paper names one) and the frame planner (`plan.enabled`; the paper plans nothing).
+//! `--set plan.enabled=false` with a named technique is the paper's frame. The same keys are set
+//! from the command line (`--set key=value`), from scene files (`[options]`), by bench sweeps and by the
 //! viewer's panels; `shadowlab options` lists them.
 //!
 //! Options are declared once with [`define_options!`], which generates the plain-data structs
@@ -224,7 +227,7 @@ macro_rules! define_options {
             }
         )*
 
-        /// Every pipeline choice. `Options::default()` is the paper's pipeline.
+        /// Every pipeline choice (see the module docs for which defaults are the paper's).
         #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
         #[serde(default, deny_unknown_fields)]
         pub struct Options {
@@ -552,8 +555,10 @@ option_enum! {
 
 define_options! {
     root {
-        /// Shadow technique for every light.
-        technique: Technique = Technique::None;
+        /// Shadow technique for every light. The default, `auto`, shadows every light with
+        /// the technique the planner picks for it (see `accuracy`); the paper's frame names one
+        /// (`shadow_map` or `shadow_volume`) with `plan.enabled = false`.
+        technique: Technique = Technique::Auto;
         /// Frame width in pixels (the paper renders 640x480).
         width: u32 = 640, in 16 ..= 16384;
         /// Frame height in pixels.
@@ -942,10 +947,11 @@ mod tests {
     use super::*;
 
     #[test]
-    fn defaults_are_the_papers_choices() {
+    fn defaults_are_the_papers_frame_size_and_show_shadows() {
         let o = Options::default();
         assert_eq!((o.width, o.height), (640, 480));
-        assert_eq!(o.technique, Technique::None);
+        // `render` and `view` shadow every light without options.
+        assert_eq!(o.technique, Technique::Auto);
     }
 
     #[test]

@@ -2,16 +2,16 @@
 
 mod common;
 
-use common::{image_difference, mean_luma, render, render_on};
+use common::{image_difference, mean_luma, render, render_on, test_options};
 use glam::Vec3;
-use shadowlab::options::{BackendChoice, Options};
+use shadowlab::options::BackendChoice;
 use shadowlab::scene::builtin::{self, SPOT_POSITION, SPOT_TARGET};
 use std::process::Command;
 
 #[test]
 fn floor_under_the_spot_light_is_brighter_than_outside_its_cone() {
     let scene = builtin::default_scene();
-    let mut options = Options::default();
+    let mut options = test_options();
     // Only the spot light, so the omni light cannot brighten the comparison point.
     options.set("lighting.only", "0").unwrap();
     let frame = render(&scene, &options);
@@ -35,7 +35,7 @@ fn floor_under_the_spot_light_is_brighter_than_outside_its_cone() {
 #[test]
 fn lights_off_leaves_only_the_ambient_level() {
     let scene = builtin::default_scene();
-    let mut on = Options::default();
+    let mut on = test_options();
     on.set("lighting.only", "0").unwrap();
     let mut off = on.clone();
     off.set("lighting.lights", "false").unwrap();
@@ -47,7 +47,7 @@ fn lights_off_leaves_only_the_ambient_level() {
 #[test]
 fn two_renders_are_bit_identical() {
     let scene = builtin::default_scene();
-    let options = Options::default();
+    let options = test_options();
     let a = render(&scene, &options);
     let b = render(&scene, &options);
     assert_eq!(image_difference(&a, &b), (0, 0));
@@ -56,7 +56,7 @@ fn two_renders_are_bit_identical() {
 #[test]
 fn osmesa_matches_egl() {
     let scene = builtin::default_scene();
-    let options = Options::default();
+    let options = test_options();
     // Separate threads: each library's context is current only on its own thread.
     let s2 = scene.clone();
     let o2 = options.clone();

@@ -8,7 +8,7 @@
 
 mod common;
 
-use common::{Measured, Measurer, load_asset, load_scene_file, options_with};
+use common::{Measured, Measurer, load_asset, load_scene_file, options_with, test_options};
 use glam::Vec3;
 use shadowlab::images::{Mask, MaskValue};
 use shadowlab::options::Options;
@@ -508,7 +508,7 @@ fn case10_ten_thousand_frames_of_a_moving_light_on_oa_dm1() {
     // Keep two lights: one static (light 0) and one that circles and comes back (light 1).
     scene.lights.truncate(2);
     let home = scene.lights[1].position;
-    let mut options = Options::default();
+    let mut options = test_options();
     options.set("width", "64").unwrap();
     options.set("height", "48").unwrap();
     options.set("shadow_map.size", "256").unwrap();

@@ -5,7 +5,7 @@
 
 mod common;
 
-use common::{gl_on, load_asset, load_scene_file};
+use common::{gl_on, load_asset, load_scene_file, test_options};
 use glam::{Mat4, Vec3};
 use shadowlab::frame::Frame;
 use shadowlab::geometry::Frustum;
@@ -164,7 +164,7 @@ fn check_scene(scene: &Scene, options: &Options, frames: usize, step: f32) {
 #[test]
 fn builtin_masks_equal_with_the_planner_on_and_off() {
     let scene = shadowlab::scene::builtin::default_scene();
-    check_scene(&scene, &Options::default(), 8, 60.0);
+    check_scene(&scene, &test_options(), 8, 60.0);
 }
 
 #[test]
@@ -311,7 +311,7 @@ fn the_gpu_depth_reduction_is_the_pyramid_of_the_full_readback() {
     use shadowlab::plan::occlusion::DepthPyramid;
     use shadowlab::plan::scissor::Scissor;
     let (w, h) = (203u32, 117u32);
-    let (ctx, _r) = gl_on(BackendChoice::Egl, &Options::default());
+    let (ctx, _r) = gl_on(BackendChoice::Egl, &test_options());
     let gl = &ctx.gl;
     let frame = Framebuffer::new(gl, w, h).unwrap();
     frame.bind(gl);
@@ -540,10 +540,7 @@ fn split_counting_changes_at_most_edge_pixels() {
 /// pixel centre; along camera paths on the three scenes, with the caches warm.
 #[test]
 fn truncated_volumes_change_at_most_edge_pixels() {
-    let builtin = (
-        shadowlab::scene::builtin::default_scene(),
-        Options::default(),
-    );
+    let builtin = (shadowlab::scene::builtin::default_scene(), test_options());
     let (dm1, _, dm1_options) = load_scene_file("oa_dm1");
     let (wrack, _, wrack_options) = load_scene_file("wrackdm17");
     for (scene, options) in [builtin, (dm1, dm1_options), (wrack, wrack_options)] {
@@ -593,10 +590,7 @@ fn cached_volumes_follow_a_turning_camera() {
 #[test]
 fn omni_lights_as_cube_maps_are_as_accurate_as_six_spots() {
     let (dm1, _, dm1_options) = load_scene_file("oa_dm1");
-    let builtin = (
-        shadowlab::scene::builtin::default_scene(),
-        Options::default(),
-    );
+    let builtin = (shadowlab::scene::builtin::default_scene(), test_options());
     for (scene, options) in [builtin, (dm1, dm1_options)] {
         let name = scene.name.clone();
         let omni: Vec<usize> = (0..scene.lights.len())
@@ -690,7 +684,7 @@ fn a_light_outside_the_frustum_whose_shadow_reaches_into_view_is_kept() {
     // casting the objects' shadows straight down onto the floor in view.
     scene.lights[1].position = Vec3::new(0.0, 0.0, 600.0);
     scene.lights[1].radius = 1200.0;
-    let options = with(&Options::default(), &["lighting.only=1"]);
+    let options = with(&test_options(), &["lighting.only=1"]);
     let setup = CameraSetup::new(&scene.camera, options.width, options.height);
     let clip = setup.view_proj * scene.lights[1].position.extend(1.0);
     assert!(
@@ -885,7 +879,7 @@ fn with_the_papers_edge_rule_culling_only_closes_leaks() {
 #[test]
 fn depth_pass_is_not_chosen_for_alpha_tested_casters() {
     let scene = shadowlab::scene::builtin::default_scene();
-    let base = with(&Options::default(), VOLUMES_SAME);
+    let base = with(&test_options(), VOLUMES_SAME);
     let counting = with(&base, &["plan.counting=true"]);
     let (_ctx, mut r) = gl_on(BackendChoice::Egl, &base);
     r.load_scene(&scene).unwrap();

@@ -4,9 +4,9 @@
 
 mod common;
 
-use common::{load_scene_file, openarena_data};
+use common::{load_scene_file, openarena_data, test_options};
 use shadowlab::gl::{Renderer, create_context};
-use shadowlab::options::{BackendChoice, Options};
+use shadowlab::options::BackendChoice;
 use shadowlab::q3::builder::SceneBuilder;
 use shadowlab::q3::pk3::Vfs;
 use shadowlab::q3::world;
@@ -22,7 +22,7 @@ fn every_map_in_the_data_set_loads_and_renders_a_frame() {
     assert!(maps.len() >= 58, "only {} maps in the data set", maps.len());
     let mut warnings = Vec::new();
     let shaders = load_shader_library(&vfs, &mut warnings);
-    let mut options = Options::default();
+    let mut options = test_options();
     options.set("width", "160").unwrap();
     options.set("height", "120").unwrap();
     let ctx = create_context(BackendChoice::Egl, 160, 120).unwrap();

@@ -2,7 +2,7 @@
 
 mod common;
 
-use common::{floor_quad, gl_on, scene_of};
+use common::{floor_quad, gl_on, scene_of, test_options};
 use glam::Vec3;
 use shadowlab::gl::FrameRequest;
 use shadowlab::images::MaskValue;
@@ -12,7 +12,7 @@ use shadowlab::truth::{self, Reference, Tracing};
 use std::process::Command;
 
 fn small(w: u32, h: u32) -> Options {
-    let mut o = Options::default();
+    let mut o = test_options();
     o.set("width", &w.to_string()).unwrap();
     o.set("height", &h.to_string()).unwrap();
     o

@@ -11,13 +11,12 @@
 //!    distance); depth-fail adds the facing triangles as the front cap and their flipped
 //!    extrusions as the back cap.
 
-use super::edges::Connectivity;
+use super::edges::{Connectivity, Edge};
 use crate::geometry::Aabb;
 pub use crate::options::{EdgeRule, Extrusion};
 use crate::scene::{Scene, SurfaceOwner};
 use glam::{DVec3, Mat4, Vec3};
 use serde::Serialize;
-use std::collections::HashMap;
 
 /// Whether a component's volume is counted in front of (depth-pass) or behind (depth-fail) the
 /// visible surface.
@@ -707,63 +706,103 @@ pub fn build_volume_of(
     cull: Option<ReceiverCull>,
 ) -> VolumeMesh {
     let c = &group.connectivity;
-    let pos = |i: u32| c.positions[i as usize].as_dvec3();
     let mut facing = facing_flags_of(group, comp, light, s.facing_epsilon);
-    let mut culled = 0;
-    // Per facing triangle, how far its volume reaches (a scale about the light; ∞: to
-    // infinity, or the settings' finite distance).
-    let mut reach: HashMap<u32, f64> = HashMap::new();
-    if let Some(rc) = cull {
-        let l = light.as_vec3();
-        let piece_shadow = shadow_bounds(&comp.bounds, l, rc.radius);
-        let near: Vec<&Aabb> = rc
-            .boxes
-            .iter()
-            .filter(|b| b.intersects(&piece_shadow))
-            .collect();
-        for &t in &comp.triangles {
-            if !facing[t as usize] {
-                continue;
-            }
-            match shadow_reach(c, t as usize, l, rc.radius, &near) {
-                None => {
-                    facing[t as usize] = false;
-                    culled += 1;
-                }
-                Some(scale) if rc.truncate => {
-                    reach.insert(t, scale);
-                }
-                Some(_) => {}
-            }
-        }
-    }
+    let (culled, scale) = match cull {
+        Some(rc) => cull_to_receivers(c, comp, light, &rc, &mut facing),
+        None => (0, f64::INFINITY),
+    };
     let facing_list: Vec<u32> = comp
         .triangles
         .iter()
         .copied()
         .filter(|&t| facing[t as usize])
         .collect();
-    // One far cap scale for the whole piece, the largest any facing triangle needs: a light
-    // touching one keeps the piece infinite. (A scale per triangle ends each prism sooner but
-    // adds a step side on every inner edge: on oa_dm1 it doubled the triangles and cut only a
-    // sixth of the fragments, a net loss on llvmpipe.)
-    let scale = facing_list
-        .iter()
-        .map(|t| reach.get(t).copied().unwrap_or(f64::INFINITY))
-        .fold(1.0f64, f64::max);
     let truncated = !facing_list.is_empty() && scale <= MAX_TRUNCATION;
-    let scale_of = |_t: u32| -> f64 { if truncated { scale } else { f64::INFINITY } };
     let mut mesh = VolumeMesh {
         facing: facing_list.len(),
         culled,
         truncated,
         ..VolumeMesh::default()
     };
-    // The side of edge (a, b) from scale `from` (1: the edge itself) to scale `to`.
-    let quad = |a: u32, b: u32, from: f64, to: f64, out: &mut Vec<[f32; 4]>| {
+    let sides = Sides {
+        c,
+        light,
+        s,
+        facing: &facing,
+        far: if truncated { scale } else { f64::INFINITY },
+    };
+    for &ei in &comp.edges {
+        sides.edge(&mut mesh, &c.edges[ei as usize]);
+    }
+    mesh.side_vertices = mesh.vertices.len();
+    sides.caps(&mut mesh, &facing_list, with_caps);
+    mesh.cap_vertices = mesh.vertices.len() - mesh.side_vertices;
+    mesh
+}
+
+/// Leaves out of `facing` the facing triangles whose shadow reaches no receiver box near the
+/// piece's shadow; returns how many, and one far cap scale for the whole piece (∞ unless
+/// `truncate`): the largest any facing triangle needs, so that a light touching one keeps
+/// the piece infinite. (A scale per triangle ends each prism sooner but adds a step side on
+/// every inner edge: on oa_dm1 it doubled the triangles and cut only a sixth of the
+/// fragments, a net loss on llvmpipe.)
+fn cull_to_receivers(
+    c: &Connectivity,
+    comp: &Component,
+    light: DVec3,
+    rc: &ReceiverCull,
+    facing: &mut [bool],
+) -> (usize, f64) {
+    let l = light.as_vec3();
+    let piece_shadow = shadow_bounds(&comp.bounds, l, rc.radius);
+    let near: Vec<&Aabb> = rc
+        .boxes
+        .iter()
+        .filter(|b| b.intersects(&piece_shadow))
+        .collect();
+    let mut culled = 0;
+    let mut scale = 1.0f64;
+    for &t in &comp.triangles {
+        if !facing[t as usize] {
+            continue;
+        }
+        match shadow_reach(c, t as usize, l, rc.radius, &near) {
+            None => {
+                facing[t as usize] = false;
+                culled += 1;
+            }
+            Some(reach) if rc.truncate => scale = scale.max(reach),
+            Some(_) => scale = f64::INFINITY,
+        }
+    }
+    if !rc.truncate {
+        scale = f64::INFINITY;
+    }
+    (culled, scale)
+}
+
+/// Writes one piece's volume: the sides of its edges and its caps.
+struct Sides<'a> {
+    c: &'a Connectivity,
+    light: DVec3,
+    s: &'a VolumeSettings,
+    facing: &'a [bool],
+    /// How far every facing triangle's volume reaches (a scale about the light; ∞: to
+    /// infinity, or the settings' finite distance).
+    far: f64,
+}
+
+impl Sides<'_> {
+    fn pos(&self, i: u32) -> DVec3 {
+        self.c.positions[i as usize].as_dvec3()
+    }
+
+    /// The side of edge (a, b) from scale `from` (1: the edge itself) to scale `to`.
+    fn quad(&self, a: u32, b: u32, from: f64, to: f64, mesh: &mut VolumeMesh) {
+        let (light, s) = (self.light, self.s);
         // (b, a, a', b') faces out of the volume when (a, b) runs along the facing triangle's
         // counter-clockwise winding.
-        let (pa, pb) = (pos(a), pos(b));
+        let (pa, pb) = (self.pos(a), self.pos(b));
         let (ea, eb) = (extrude(pa, light, s, to), extrude(pb, light, s, to));
         let (va, vb) = (extrude(pa, light, s, from), extrude(pb, light, s, from));
         // The diagonal runs from the lower vertex index's point to the other's extrusion, so
@@ -775,12 +814,14 @@ pub fn build_volume_of(
             [vb, va, ea, vb, ea, eb]
         };
         for v in triangles {
-            out.push(to_f32(v));
+            mesh.vertices.push(to_f32(v));
         }
-    };
-    // The edge's direction in triangle t's winding.
-    let oriented = |t: u32, v: [u32; 2]| -> (u32, u32) {
-        let tri = c.triangles[t as usize];
+        mesh.quads += 1;
+    }
+
+    /// The edge's direction in triangle t's winding.
+    fn oriented(&self, t: u32, v: [u32; 2]) -> (u32, u32) {
+        let tri = self.c.triangles[t as usize];
         for k in 0..3 {
             let (a, b) = (tri[k], tri[(k + 1) % 3]);
             if (a, b) == (v[0], v[1]) || (a, b) == (v[1], v[0]) {
@@ -788,118 +829,97 @@ pub fn build_volume_of(
             }
         }
         (v[0], v[1])
-    };
-    for &ei in &comp.edges {
-        let e = &c.edges[ei as usize];
-        let tris = c.triangles_of(e);
+    }
+
+    /// A facing triangle's side along edge `v`, from the edge to its reach.
+    fn outer(&self, mesh: &mut VolumeMesh, t: u32, v: [u32; 2]) {
+        let (a, b) = self.oriented(t, v);
+        self.quad(a, b, 1.0, self.far, mesh);
+    }
+
+    /// The sides one edge contributes under the settings' edge rule.
+    fn edge(&self, mesh: &mut VolumeMesh, e: &Edge) {
+        let tris = self.c.triangles_of(e);
         let facing_here: Vec<u32> = tris
             .iter()
             .copied()
-            .filter(|&t| facing[t as usize])
+            .filter(|&t| self.facing[t as usize])
             .collect();
-        // Two facing triangles on an edge that the rule treats as inner: their sides cancel
-        // up to the nearer reach; the rest of the farther one's side stays (nothing when both
-        // reach equally far, as at infinity).
-        let inner = |mesh: &mut VolumeMesh, t0: u32, t1: u32| {
-            let (k0, k1) = (scale_of(t0), scale_of(t1));
-            let (far, from, to) = if k0 >= k1 { (t0, k1, k0) } else { (t1, k0, k1) };
-            if from < to {
-                let (a, b) = oriented(far, e.v);
-                quad(a, b, from, to, &mut mesh.vertices);
-                mesh.quads += 1;
-            }
-        };
-        match s.rule {
-            EdgeRule::Paper => {
-                if tris.len() == 2 && facing_here.len() == 2 {
-                    inner(&mut mesh, facing_here[0], facing_here[1]);
-                    continue;
-                }
+        match self.s.rule {
+            // Two facing triangles on an edge that the rule treats as inner: their sides
+            // cancel, since every facing triangle of a piece reaches equally far.
+            EdgeRule::Paper if tris.len() == 2 && facing_here.len() == 2 => {}
+            EdgeRule::Paper | EdgeRule::All => {
                 for &t in &facing_here {
-                    let (a, b) = oriented(t, e.v);
-                    quad(a, b, 1.0, scale_of(t), &mut mesh.vertices);
-                    mesh.quads += 1;
+                    self.outer(mesh, t, e.v);
                 }
             }
-            EdgeRule::All => {
-                for &t in &facing_here {
-                    let (a, b) = oriented(t, e.v);
-                    quad(a, b, 1.0, scale_of(t), &mut mesh.vertices);
-                    mesh.quads += 1;
-                }
-            }
-            EdgeRule::Signed => {
-                // +1 for each facing triangle running v[0] -> v[1], -1 for v[1] -> v[0], each
-                // from the edge to its own reach: between consecutive reaches the net of the
-                // triangles reaching further.
-                let mut spans: Vec<(f64, i32)> = facing_here
-                    .iter()
-                    .map(|&t| {
-                        let sign = if oriented(t, e.v) == (e.v[0], e.v[1]) {
-                            1
-                        } else {
-                            -1
-                        };
-                        (scale_of(t), sign)
-                    })
-                    .collect();
-                spans.sort_by(|x, y| x.0.total_cmp(&y.0));
-                let mut from = 1.0;
-                for i in 0..spans.len() {
-                    let to = spans[i].0;
-                    let net: i32 = spans[i..].iter().map(|x| x.1).sum();
-                    if to > from && net != 0 {
-                        let (a, b) = if net > 0 {
-                            (e.v[0], e.v[1])
-                        } else {
-                            (e.v[1], e.v[0])
-                        };
-                        for _ in 0..net.unsigned_abs() {
-                            quad(a, b, from, to, &mut mesh.vertices);
-                            mesh.quads += 1;
-                        }
-                    }
-                    from = from.max(to);
-                }
-            }
+            EdgeRule::Signed => self.signed(mesh, e.v, &facing_here),
             EdgeRule::Manifold => {
                 if tris.len() < 2 {
-                    continue;
+                    return;
                 }
-                let (f0, f1) = (facing[tris[0] as usize], facing[tris[1] as usize]);
-                if f0 && f1 {
-                    inner(&mut mesh, tris[0], tris[1]);
-                } else if f0 != f1 {
-                    let t = if f0 { tris[0] } else { tris[1] };
-                    let (a, b) = oriented(t, e.v);
-                    quad(a, b, 1.0, scale_of(t), &mut mesh.vertices);
-                    mesh.quads += 1;
+                let (f0, f1) = (self.facing[tris[0] as usize], self.facing[tris[1] as usize]);
+                // Both facing: inner, their sides cancel (see above).
+                if f0 != f1 {
+                    self.outer(mesh, if f0 { tris[0] } else { tris[1] }, e.v);
                 }
             }
         }
     }
-    mesh.side_vertices = mesh.vertices.len();
-    if with_caps {
-        for &t in &facing_list {
-            let [a, b, c3] = c.triangles[t as usize].map(pos);
-            for p in [a, b, c3] {
-                mesh.vertices.push(to_f32([p.x, p.y, p.z, 1.0]));
+
+    /// `EdgeRule::Signed`: +1 for each facing triangle running v[0] -> v[1], -1 for
+    /// v[1] -> v[0], each from the edge to its own reach: between consecutive reaches the net
+    /// of the triangles reaching further.
+    fn signed(&self, mesh: &mut VolumeMesh, v: [u32; 2], facing_here: &[u32]) {
+        let mut spans: Vec<(f64, i32)> = facing_here
+            .iter()
+            .map(|&t| {
+                let sign = if self.oriented(t, v) == (v[0], v[1]) {
+                    1
+                } else {
+                    -1
+                };
+                (self.far, sign)
+            })
+            .collect();
+        spans.sort_by(|x, y| x.0.total_cmp(&y.0));
+        let mut from = 1.0;
+        for i in 0..spans.len() {
+            let to = spans[i].0;
+            let net: i32 = spans[i..].iter().map(|x| x.1).sum();
+            if to > from && net != 0 {
+                let (a, b) = if net > 0 { (v[0], v[1]) } else { (v[1], v[0]) };
+                for _ in 0..net.unsigned_abs() {
+                    self.quad(a, b, from, to, mesh);
+                }
+            }
+            from = from.max(to);
+        }
+    }
+
+    /// The front cap (the facing triangles, `with_caps`) and the back cap (extruded to the
+    /// reach, flipped); a truncated volume's back cap closes it under depth-pass too.
+    fn caps(&self, mesh: &mut VolumeMesh, facing_list: &[u32], with_caps: bool) {
+        let tri = |t: u32| self.c.triangles[t as usize].map(|i| self.pos(i));
+        if with_caps {
+            for &t in facing_list {
+                for p in tri(t) {
+                    mesh.vertices.push(to_f32([p.x, p.y, p.z, 1.0]));
+                }
+            }
+        }
+        if with_caps || mesh.truncated {
+            for &t in facing_list {
+                let [a, b, c] = tri(t);
+                // Flipped: the back cap faces away from the light, out of the volume.
+                for p in [c, b, a] {
+                    mesh.vertices
+                        .push(to_f32(extrude(p, self.light, self.s, self.far)));
+                }
             }
         }
     }
-    // A truncated volume's far cap closes it under depth-pass too.
-    if with_caps || truncated {
-        for &t in &facing_list {
-            let [a, b, c3] = c.triangles[t as usize].map(pos);
-            // Flipped: the back cap faces away from the light, out of the volume.
-            for p in [c3, b, a] {
-                mesh.vertices
-                    .push(to_f32(extrude(p, light, s, scale_of(t))));
-            }
-        }
-    }
-    mesh.cap_vertices = mesh.vertices.len() - mesh.side_vertices;
-    mesh
 }
 
 /// A group's transform to world space.

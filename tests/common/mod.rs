@@ -77,7 +77,7 @@ pub fn load_scene_file(name: &str) -> (Scene, shadowlab::scene::file::LoadReport
 pub fn load_asset(relative: &str) -> (Scene, shadowlab::scene::file::LoadReport, Options) {
     let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join(relative);
     let file = shadowlab::scene::file::SceneFile::read(&path).unwrap_or_else(|e| panic!("{e}"));
-    let mut options = Options::default();
+    let mut options = test_options();
     options.apply_toml(&file.options).unwrap();
     options.q3.progress = false;
     let (scene, report) = file.build(&options).unwrap_or_else(|e| panic!("{e}"));
@@ -221,9 +221,19 @@ impl Measurer {
     }
 }
 
-/// Default options with `sets` applied.
+/// The options the tests are written against: the library's defaults with every light
+/// unshadowed (`technique = none`) unless a test sets a technique. (The library's default
+/// is `auto`, for people; a test names what it tests.)
+pub fn test_options() -> Options {
+    Options {
+        technique: shadowlab::options::Technique::None,
+        ..Options::default()
+    }
+}
+
+/// [`test_options`] with `sets` applied.
 pub fn options_with(sets: &[&str]) -> Options {
-    let mut o = Options::default();
+    let mut o = test_options();
     for s in sets {
         o.set_assignment(s).unwrap_or_else(|e| panic!("{e}"));
     }
