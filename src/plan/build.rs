@@ -11,7 +11,7 @@ use crate::options::{
 };
 use crate::scene::{Camera, Light, Scene, SurfaceOwner};
 use crate::shadow::views::{ViewKind, shadow_views};
-use crate::shadow::volume::{self, CasterGroup, CasterGroups, Counting};
+use crate::shadow::volume::{self, CasterGroup, CasterGroups, Counting, PieceRef};
 use glam::{Mat4, Vec3};
 
 /// A hash of anything hashable.
@@ -26,9 +26,9 @@ fn mat_bits(m: &Mat4) -> [u32; 16] {
     m.to_cols_array().map(f32::to_bits)
 }
 
-/// One caster piece the planner may extrude: its group's index, its index among the group's
-/// chunks (or components in the paper's frame), its world bounds and its group.
-type PieceCandidate<'a> = (usize, usize, Aabb, &'a CasterGroup);
+/// One caster piece the planner may extrude: its group's index, the piece, its world bounds
+/// and its group.
+type PieceCandidate<'a> = (usize, PieceRef, Aabb, &'a CasterGroup);
 
 /// What is known of the frame before any light is planned.
 struct FrameFacts<'a> {
@@ -51,8 +51,6 @@ struct FrameFacts<'a> {
     caster_bounds: Vec<Aabb>,
     /// Shadow-volume pieces with their world bounds.
     pieces: Vec<PieceCandidate<'a>>,
-    /// Pieces are chunks (the planner culls them) rather than whole components.
-    chunked: bool,
     map_options: ShadowMapOptions,
     map_options_text: String,
 }
@@ -261,10 +259,14 @@ impl<'a> FrameFacts<'a> {
             .flat_map(|(gi, g)| {
                 let t = volume::group_transform(scene, g.owner);
                 let pieces = if chunked { &g.chunks } else { &g.components };
-                pieces
-                    .iter()
-                    .enumerate()
-                    .map(move |(ci, c)| (gi, ci, c.bounds.transformed(&t), g))
+                pieces.iter().enumerate().map(move |(ci, c)| {
+                    let piece = if chunked {
+                        PieceRef::Chunk(ci)
+                    } else {
+                        PieceRef::Component(ci)
+                    };
+                    (gi, piece, c.bounds.transformed(&t), g)
+                })
             })
             .collect();
         let map_options = map_options_of(options);
@@ -284,7 +286,6 @@ impl<'a> FrameFacts<'a> {
             alpha_caster_bounds,
             caster_bounds,
             pieces,
-            chunked,
             map_options_text: format!("{map_options:?}"),
             map_options,
         }
@@ -560,7 +561,7 @@ impl FrameFacts<'_> {
             .iter()
             .map(|&r| self.scene.surfaces[r as usize].bounds)
             .collect();
-        for &(group, component, bounds, g) in &self.pieces {
+        for &(group, piece, bounds, g) in &self.pieces {
             let keep = !(on && p.cull_casters) || {
                 let shadow = cull::shadow_bounds(&bounds, l.position, l.radius);
                 cull::sphere_meets_aabb(l.position, l.radius, &bounds)
@@ -574,12 +575,11 @@ impl FrameFacts<'_> {
             stats.casters_drawn += 1;
             let part = |counting, triangles| VolumePart {
                 group,
-                component,
-                chunked: self.chunked,
+                piece,
                 counting,
                 triangles,
             };
-            match self.counting_of(plan, g, component, &bounds) {
+            match self.counting_of(plan, g, piece, &bounds) {
                 Some(counting) => {
                     match counting {
                         Counting::ZFail => stats.zfail_parts += 1,
@@ -616,7 +616,7 @@ impl FrameFacts<'_> {
         &self,
         plan: &mut LightPlan,
         g: &CasterGroup,
-        component: usize,
+        piece: PieceRef,
         bounds: &Aabb,
     ) -> Option<Counting> {
         let p = &self.options.plan;
@@ -634,7 +634,7 @@ impl FrameFacts<'_> {
         }
         // A ray seen through an alpha-tested caster's holes enters its volume through the
         // front cap, which depth-pass does not draw.
-        let alpha = g.piece(component, self.chunked).alpha_tested;
+        let alpha = g.piece(piece).alpha_tested;
         let pos = self.scene.lights[plan.light].position;
         let boxed = volume::potentially_inside_shadow(bounds, self.camera.position, pos, self.near);
         match (alpha, boxed, on && p.near_plane_test) {
@@ -645,7 +645,7 @@ impl FrameFacts<'_> {
                 let near_tris = near_plane_triangles(
                     self.scene,
                     g,
-                    (component, self.chunked),
+                    piece,
                     pos,
                     &self.near_quad,
                     self.options.shadow_volume.facing_epsilon,
@@ -663,14 +663,13 @@ impl FrameFacts<'_> {
     }
 }
 
-/// `plan.near_plane_test` for one piece (a chunk, or a component when not `chunked`) of caster
-/// group `g`: its facing triangles whose shadow from a light at `light` may hold part of the
+/// `plan.near_plane_test` for one piece of caster group `g`: its facing triangles whose shadow from a light at `light` may hold part of the
 /// camera's near-plane rectangle `near_quad` (world space), tested in the group's own space;
 /// sorted.
 fn near_plane_triangles(
     scene: &Scene,
     g: &CasterGroup,
-    (index, chunked): (usize, bool),
+    piece: PieceRef,
     light: Vec3,
     near_quad: &[Vec3; 4],
     facing_epsilon: f32,
@@ -678,7 +677,7 @@ fn near_plane_triangles(
     let to_local = volume::group_transform(scene, g.owner).inverse();
     let mut near: Vec<u32> = volume::near_plane_triangles(
         g,
-        g.piece(index, chunked),
+        g.piece(piece),
         to_local.transform_point3(light).as_dvec3(),
         &near_quad.map(|q| to_local.transform_point3(q).as_dvec3()),
         facing_epsilon,

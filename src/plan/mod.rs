@@ -19,7 +19,7 @@ use crate::options::{Options, StencilPasses, Technique, VolumeProjection};
 use crate::scene::vis::VisStats;
 use crate::scene::{Camera, Scene};
 use crate::shadow::views::ShadowView;
-use crate::shadow::volume::{CasterGroups, Counting};
+use crate::shadow::volume::{CasterGroups, Counting, PieceRef};
 use auto::CostMemory;
 use glam::{Mat3, Mat4, Vec3};
 use scissor::Scissor;
@@ -82,11 +82,9 @@ impl CameraSetup {
 pub struct VolumePart {
     /// Index into the scene's caster groups.
     pub group: usize,
-    /// Index into the group's components, or its chunks when `chunked`.
-    pub component: usize,
-    /// Whether the piece is a chunk (the planner culls chunks; the paper's frame extrudes
-    /// whole components).
-    pub chunked: bool,
+    /// The piece of the group (the planner culls chunks; the paper's frame extrudes whole
+    /// components).
+    pub piece: PieceRef,
     pub counting: Counting,
     /// Which of the piece's triangles the part holds.
     pub triangles: PartTriangles,

@@ -28,7 +28,7 @@ use crate::plan::occlusion::DepthPyramid;
 use crate::plan::scissor::{Scissor, points_scissor};
 use crate::plan::{CameraSetup, LightPlan, PartTriangles};
 use crate::scene::Scene;
-use crate::shadow::volume::{self, CasterGroups, Counting, VolumeSettings};
+use crate::shadow::volume::{self, CasterGroups, Counting, PieceRef, VolumeSettings};
 use glam::Mat4;
 use serde::Serialize;
 use std::borrow::Cow;
@@ -111,13 +111,9 @@ pub enum PieceId {
     Component(usize),
     /// The chunks `first..end`: one chunk, or neighbours merged (`plan.merge_pieces`).
     Chunks(usize, usize),
-    /// Part of a chunk (`chunked`) or component split by counting (`plan.split_counting`):
-    /// its triangles near the near plane, or the rest.
-    Split {
-        index: usize,
-        chunked: bool,
-        near_plane: bool,
-    },
+    /// Part of a chunk or component split by counting (`plan.split_counting`): its triangles
+    /// near the near plane, or the rest.
+    Split { of: PieceRef, near_plane: bool },
 }
 
 /// One part's vertex ranges in the light's buffer.
@@ -367,9 +363,7 @@ impl Piece {
             }
             (None, PieceId::Chunks(first, end)) => Cow::Owned(group.chunk_span(first, end)),
             (None, PieceId::Component(i)) => Cow::Borrowed(&group.components[i]),
-            (None, PieceId::Split { index, chunked, .. }) => {
-                Cow::Borrowed(group.piece(index, chunked))
-            }
+            (None, PieceId::Split { of, .. }) => Cow::Borrowed(group.piece(of)),
         }
     }
 }
@@ -666,7 +660,7 @@ fn plan_pieces(
         let model = volume::group_transform(scene, group.owner);
         let to_local = model.inverse();
         let light_local = to_local.transform_point3(light_world);
-        let whole = group.piece(p.component, p.chunked);
+        let whole = group.piece(p.piece);
         let (id, subset, subset_key) = piece_triangles(lp, p, group, whole);
         let piece = subset.as_ref().unwrap_or(whole);
         let (boxes, _) = local_boxes.entry(p.group).or_insert_with(|| {
@@ -716,15 +710,16 @@ fn piece_triangles(
     whole: &volume::Component,
 ) -> (PieceId, Option<volume::Component>, u64) {
     match p.triangles {
-        PartTriangles::All if p.chunked => (PieceId::Chunks(p.component, p.component + 1), None, 0),
-        PartTriangles::All => (PieceId::Component(p.component), None, 0),
+        PartTriangles::All => match p.piece {
+            PieceRef::Chunk(i) => (PieceId::Chunks(i, i + 1), None, 0),
+            PieceRef::Component(i) => (PieceId::Component(i), None, 0),
+        },
         PartTriangles::NearPlane(i) | PartTriangles::Rest(i) => {
             let near_plane = matches!(p.triangles, PartTriangles::NearPlane(_));
             let listed = &lp.near_plane_triangles[i];
             let subset = group.subset(whole, |t| listed.binary_search(&t).is_ok() == near_plane);
             let id = PieceId::Split {
-                index: p.component,
-                chunked: p.chunked,
+                of: p.piece,
                 near_plane,
             };
             let mut h = DefaultHasher::new();

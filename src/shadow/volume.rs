@@ -41,6 +41,14 @@ pub struct Component {
     pub alpha_tested: bool,
 }
 
+/// Which piece of a caster group a volume is extruded from: a whole connected component (the
+/// paper's frame) or one chunk of one (the planner's unit, `plan.cull_casters`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum PieceRef {
+    Component(usize),
+    Chunk(usize),
+}
+
 /// The casters of one owner, welded, with their connectivity and components.
 #[derive(Debug, Clone)]
 pub struct CasterGroup {
@@ -331,12 +339,11 @@ impl CasterGroup {
         }
     }
 
-    /// Piece `index`: a chunk when `chunked` (the planner's unit), else a component.
-    pub fn piece(&self, index: usize, chunked: bool) -> &Component {
-        if chunked {
-            &self.chunks[index]
-        } else {
-            &self.components[index]
+    /// The piece `r` names.
+    pub fn piece(&self, r: PieceRef) -> &Component {
+        match r {
+            PieceRef::Component(i) => &self.components[i],
+            PieceRef::Chunk(i) => &self.chunks[i],
         }
     }
 
