@@ -1,5 +1,6 @@
 //! The unlit world (paper 2.4): texture × lightmap, writing the depth the later passes test against.
 
+use super::state::DrawState;
 use super::{PassContext, draw_items};
 use crate::gl::program::Program;
 use crate::scene::{BakedLight, SurfaceOwner};
@@ -9,19 +10,13 @@ use glow::HasContext;
 pub fn draw(ctx: &PassContext, program: &Program) {
     let gl = ctx.gl;
     // SAFETY: fixed-function state on the bound framebuffer.
+    DrawState::OPAQUE.apply(gl);
     unsafe {
-        gl.color_mask(true, true, true, true);
-        gl.depth_mask(true);
         gl.stencil_mask(0xff);
         gl.clear_color(0.0, 0.0, 0.0, 1.0);
         gl.clear_depth_f64(1.0);
         gl.clear_stencil(0);
         gl.clear(glow::COLOR_BUFFER_BIT | glow::DEPTH_BUFFER_BIT | glow::STENCIL_BUFFER_BIT);
-        gl.enable(glow::DEPTH_TEST);
-        gl.depth_func(glow::LESS);
-        gl.disable(glow::BLEND);
-        gl.disable(glow::STENCIL_TEST);
-        gl.disable(glow::POLYGON_OFFSET_FILL);
     }
     program.bind(gl);
     program.set_mat4(gl, "u_view_proj", &ctx.plan.camera.view_proj);

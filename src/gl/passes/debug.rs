@@ -4,6 +4,7 @@
 //! never written; the stencil is left alone.
 
 use super::PassContext;
+use super::state::DrawState;
 use crate::gl::program::Program;
 use crate::gl::volumes::LightVolumes;
 use crate::shadow::volume::Counting;
@@ -23,17 +24,14 @@ pub fn volumes(
     let gl = ctx.gl;
     program.bind(gl);
     program.set_mat4(gl, "u_view_proj", &ctx.plan.camera.view_proj);
+    DrawState {
+        blend: Some((glow::SRC_ALPHA, glow::ONE_MINUS_SRC_ALPHA)),
+        ..DrawState::OVER_DEPTH
+    }
+    .apply(gl);
     // SAFETY: fixed-function state; draws the light's own volume buffer.
     unsafe {
-        gl.disable(glow::STENCIL_TEST);
         gl.disable(glow::CULL_FACE);
-        gl.disable(glow::POLYGON_OFFSET_FILL);
-        gl.enable(glow::DEPTH_TEST);
-        gl.depth_func(glow::LEQUAL);
-        gl.depth_mask(false);
-        gl.color_mask(true, true, true, true);
-        gl.enable(glow::BLEND);
-        gl.blend_func(glow::SRC_ALPHA, glow::ONE_MINUS_SRC_ALPHA);
         gl.bind_vertex_array(Some(v.vao));
         for p in v.parts.iter().filter(|p| p.drawn()) {
             program.set_mat4(gl, "u_model", &p.model);

@@ -1,6 +1,7 @@
 //! The G-buffer pass: world position and normal of the visible surface at every pixel, for the
 //! exact reference. Run only when masks are requested, so it never counts in frame timings.
 
+use super::state::DrawState;
 use super::{PassContext, draw_items};
 use crate::gl::program::Program;
 use glow::HasContext;
@@ -8,17 +9,11 @@ use glow::HasContext;
 pub fn draw(ctx: &PassContext, program: &Program) {
     let gl = ctx.gl;
     // SAFETY: fixed-function state on the bound G-buffer framebuffer.
+    DrawState::OPAQUE.apply(gl);
     unsafe {
-        gl.color_mask(true, true, true, true);
-        gl.depth_mask(true);
         gl.clear_color(0.0, 0.0, 0.0, 0.0);
         gl.clear_depth_f64(1.0);
         gl.clear(glow::COLOR_BUFFER_BIT | glow::DEPTH_BUFFER_BIT);
-        gl.enable(glow::DEPTH_TEST);
-        gl.depth_func(glow::LESS);
-        gl.disable(glow::BLEND);
-        gl.disable(glow::STENCIL_TEST);
-        gl.disable(glow::POLYGON_OFFSET_FILL);
     }
     program.bind(gl);
     program.set_mat4(gl, "u_view_proj", &ctx.plan.camera.view_proj);

@@ -2,6 +2,7 @@
 //! mask variant, which writes the same fragments' decision instead of light.
 
 use super::shadow_map::offset_for;
+use super::state::DrawState;
 use super::{PassContext, draw_items};
 use crate::gl::program::Program;
 use crate::options::{OffsetPass, Outside};
@@ -139,17 +140,6 @@ fn bind_light(ctx: &PassContext, program: &Program, lp: &LightPlan, shadow: &Lit
     }
 }
 
-/// Depth state shared by the lit pass and its mask: test against the unlit pass, never write.
-fn depth_state(gl: &glow::Context) {
-    // SAFETY: fixed-function state.
-    unsafe {
-        gl.depth_mask(false);
-        gl.enable(glow::DEPTH_TEST);
-        gl.depth_func(glow::LEQUAL);
-        gl.disable(glow::STENCIL_TEST);
-    }
-}
-
 /// Draw only where the stencil compares to 0 with `func` (EQUAL: lit; NOTEQUAL: shadowed).
 fn stencil_gate(gl: &glow::Context, func: u32) {
     // SAFETY: fixed-function state.
@@ -185,15 +175,14 @@ pub fn draw(
     receivers: &[u32],
 ) {
     let gl = ctx.gl;
-    depth_state(gl);
+    // Test against the unlit pass, never write depth; add the light.
+    DrawState {
+        blend: Some((glow::ONE, glow::ONE)),
+        ..DrawState::OVER_DEPTH
+    }
+    .apply(gl);
     if let LitShadow::Stencil { test: true } = shadow {
         stencil_gate(gl, glow::EQUAL);
-    }
-    // SAFETY: fixed-function state.
-    unsafe {
-        gl.color_mask(true, true, true, true);
-        gl.enable(glow::BLEND);
-        gl.blend_func(glow::ONE, glow::ONE);
     }
     bind_light(ctx, program, lp, shadow);
     draw_items(
@@ -215,12 +204,7 @@ pub fn draw_mask(
     receivers: &[u32],
 ) {
     let gl = ctx.gl;
-    depth_state(gl);
-    // SAFETY: fixed-function state.
-    unsafe {
-        gl.color_mask(true, true, true, true);
-        gl.disable(glow::BLEND);
-    }
+    DrawState::OVER_DEPTH.apply(gl);
     bind_light(ctx, program, lp, shadow);
     let items = ctx.gpu.draw_list_of(ctx.scene, receivers);
     if let LitShadow::Stencil { .. } = shadow {

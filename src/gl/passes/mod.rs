@@ -6,6 +6,7 @@ pub mod debug;
 pub mod gbuffer;
 pub mod lit;
 pub mod shadow_map;
+pub mod state;
 pub mod stencil;
 
 use super::program::Program;

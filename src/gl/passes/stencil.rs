@@ -7,6 +7,7 @@
 //! first. Parts counted either way add up in the same buffer.
 
 use super::PassContext;
+use super::state::DrawState;
 use crate::gl::program::Program;
 use crate::gl::volumes::LightVolumes;
 use crate::options::{StencilPasses, StencilWrap, VolumeProjection};
@@ -157,16 +158,21 @@ pub fn draw(
 /// Bestimt and Freitag's fill: where the stencil is not zero, scale the frame by `shade` and zero
 /// the stencil (one full-screen triangle).
 pub fn fill(gl: &glow::Context, program: &Program, vao: glow::VertexArray, shade: f32) {
+    // Scale the frame by `shade` where the stencil is set, depth untouched.
+    DrawState {
+        color_write: true,
+        depth_write: false,
+        depth_test: None,
+        blend: Some((glow::DST_COLOR, glow::ZERO)),
+        stencil_test: true,
+        polygon_offset: None,
+    }
+    .apply(gl);
     // SAFETY: fixed-function state; a full-screen triangle from gl_VertexID.
     unsafe {
-        gl.disable(glow::DEPTH_TEST);
         gl.disable(glow::CULL_FACE);
-        gl.enable(glow::STENCIL_TEST);
         gl.stencil_func(glow::NOTEQUAL, 0, 0xff);
         gl.stencil_op(glow::KEEP, glow::KEEP, glow::ZERO);
-        gl.enable(glow::BLEND);
-        gl.blend_func(glow::DST_COLOR, glow::ZERO);
-        gl.color_mask(true, true, true, true);
         program.bind(gl);
         program.set_f32(gl, "u_shade", shade);
         gl.bind_vertex_array(Some(vao));
