@@ -155,8 +155,7 @@ fn benchmark_scenes_hold_their_lights_and_a_player() {
         assert_eq!(scene.lights.len(), lights, "{name}");
         // No light sees the backs of faces (q3dm6ish's four fill lights above the hull, which
         // do, are excluded by its scene file).
-        let reference = shadowlab::truth::Reference::build(&scene);
-        let warnings = shadowlab::truth::enclosure::warnings(&scene, &reference);
+        let warnings = shadowlab::truth::enclosure::scene_warnings(&scene);
         assert!(warnings.is_empty(), "{name}: {warnings:?}");
         assert!(
             scene

@@ -11,7 +11,9 @@ pub mod view;
 use anyhow::{Context, Result};
 use shadowlab::gl::{GlContext, Renderer, create_context};
 use shadowlab::options::{BackendChoice, OptionValue, Options};
-use shadowlab::scene::file::{LoadReport, SceneFile};
+use shadowlab::scene::file::LoadReport;
+pub use shadowlab::scene::load::Loaded;
+use shadowlab::scene::load::{LoadError, layered_options, load_file};
 use shadowlab::scene::{Scene, builtin};
 
 /// Arguments every command accepts.
@@ -46,9 +48,16 @@ pub fn parse_size(s: &str) -> Result<(u32, u32)> {
 
 /// Defaults, then a scene's `[options]`, then the command line (which wins).
 pub fn scene_options(common: &CommonArgs, table: &toml::Table) -> Result<Options> {
-    let mut o = Options::default();
-    o.apply_toml(table).context("in the scene's [options]")?;
-    common.apply(o)
+    layered_options(table, |o| common.apply(o)).map_err(load_error)
+}
+
+/// A loading error as the commands report it.
+fn load_error(e: LoadError<anyhow::Error>) -> anyhow::Error {
+    match e {
+        LoadError::File(e) => e.into(),
+        LoadError::Options(e) => anyhow::Error::new(e).context("in the scene's [options]"),
+        LoadError::Overrides(e) => e,
+    }
 }
 
 impl CommonArgs {
@@ -75,13 +84,6 @@ impl CommonArgs {
     }
 }
 
-/// A scene ready to render, the options that apply to it, and what loading reported.
-pub struct Loaded {
-    pub scene: Scene,
-    pub options: Options,
-    pub report: LoadReport,
-}
-
 /// The scene a command works on: the built-in one unless a file is given.
 pub fn load(common: &CommonArgs, path: Option<&std::path::Path>) -> Result<Loaded> {
     match path {
@@ -95,26 +97,19 @@ pub fn load(common: &CommonArgs, path: Option<&std::path::Path>) -> Result<Loade
             })
         }
         Some(p) => {
-            let file = SceneFile::read(p)?;
-            let options = scene_options(common, &file.options)?;
-            let (scene, mut report) = file.build(&options)?;
-            report.warnings.extend(enclosed_light_warnings(&scene));
-            Ok(Loaded {
-                scene,
-                options,
-                report,
-            })
+            let mut loaded = load_file(p, |o| common.apply(o)).map_err(load_error)?;
+            loaded
+                .report
+                .warnings
+                .extend(enclosed_light_warnings(&loaded.scene));
+            Ok(loaded)
         }
     }
 }
 
 /// Warns about lights that sit inside or behind geometry (see `truth::enclosure`).
 pub fn enclosed_light_warnings(scene: &Scene) -> Vec<String> {
-    if scene.lights.is_empty() {
-        return Vec::new();
-    }
-    let reference = shadowlab::truth::Reference::build(scene);
-    let warnings = shadowlab::truth::enclosure::warnings(scene, &reference);
+    let warnings = shadowlab::truth::enclosure::scene_warnings(scene);
     for w in &warnings {
         log::warn!("{w}");
     }

@@ -7,7 +7,7 @@ use shadowlab::frame::Frame;
 use shadowlab::gl::FrameRequest;
 use shadowlab::options::Technique;
 use shadowlab::scene::Scene;
-use shadowlab::truth::{self, Counts, Reference, Tracing, reference};
+use shadowlab::truth::{self, Reference, reference};
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
@@ -21,20 +21,19 @@ fn write_masks(scene: &Scene, frame: &Frame, dir: &Path) -> Result<()> {
     let start = Instant::now();
     let reference = Reference::build(scene);
     let build_ms = start.elapsed().as_secs_f64() * 1e3;
-    let mut total = Counts::default();
     let mut trace_ms = 0.0;
-    for mask in &frame.masks {
+    let measured = truth::measure_with(&frame.masks, |mask| {
         let t = Instant::now();
-        let exact = truth::reference_mask(
-            &reference,
-            gbuffer,
-            &scene.lights[mask.light],
-            mask.light,
-            Tracing::Bvh,
-        );
+        let exact = truth::exact_mask(scene, &reference, gbuffer, mask);
         trace_ms += t.elapsed().as_secs_f64() * 1e3;
-        let counts = truth::compare(mask, &exact);
-        total.add(&counts);
+        exact
+    });
+    for ((mask, exact), (_, counts)) in frame
+        .masks
+        .iter()
+        .zip(&measured.exact)
+        .zip(&measured.per_light)
+    {
         let r = counts.rates();
         println!(
             "light{} ({}): {} receivers, {:.3}% reference-shadowed, error {:.3}% (false shadow {:.3}%, false lit {:.3}%), {:.3}% excluding the boundary band, {} receiver mismatches",
@@ -53,13 +52,13 @@ fn write_masks(scene: &Scene, frame: &Frame, dir: &Path) -> Result<()> {
         exact.save_png(&name("reference"))?;
         image::save_buffer(
             name("error"),
-            &truth::error_image(mask, &exact),
+            &truth::error_image(mask, exact),
             mask.width,
             mask.height,
             image::ExtendedColorType::Rgba8,
         )?;
     }
-    let r = total.rates();
+    let r = measured.total.rates();
     println!(
         "all lights: {} receivers, error {:.3}%, {:.3}% excluding the boundary band; reference: {} triangles, BVH {:.0} ms, rays {:.0} ms",
         r.receiver_pixels,

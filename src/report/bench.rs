@@ -16,7 +16,7 @@ use crate::plan::PlanStats;
 use crate::plan::volume_draws::VolumeStats;
 use crate::scene::Scene;
 use crate::scene::path::PathKey;
-use crate::truth::{self, Counts, Reference, Tracing};
+use crate::truth::{Counts, ExactMasks};
 use indicatif::{ProgressBar, ProgressStyle};
 use serde::Serialize;
 use std::collections::{BTreeMap, HashMap};
@@ -287,9 +287,8 @@ pub struct Bench<'a> {
     renderer: &'a mut Renderer,
     scene: &'a Scene,
     settings: BenchSettings,
-    reference: Option<Reference>,
-    /// Exact masks by (width, height, light).
-    reference_masks: HashMap<(u32, u32, usize), Mask>,
+    /// Exact masks of the path's first view, by frame size and light.
+    exact: ExactMasks,
     baselines: HashMap<String, f64>,
 }
 
@@ -299,8 +298,7 @@ impl<'a> Bench<'a> {
             renderer,
             scene,
             settings,
-            reference: None,
-            reference_masks: HashMap::new(),
+            exact: ExactMasks::new(),
             baselines: HashMap::new(),
         }
     }
@@ -411,33 +409,12 @@ impl<'a> Bench<'a> {
             .gbuffer
             .as_ref()
             .ok_or(RenderError::Gl("the renderer returned no G-buffer".into()))?;
-        let reference = self
-            .reference
-            .get_or_insert_with(|| Reference::build(self.scene));
-        let mut total = Counts::default();
-        let mut per_light = Vec::new();
-        let mut exact_masks = Vec::new();
-        for mask in &frame.masks {
-            let key = (frame.width, frame.height, mask.light);
-            let exact = self.reference_masks.entry(key).or_insert_with(|| {
-                truth::reference_mask(
-                    reference,
-                    gbuffer,
-                    &self.scene.lights[mask.light],
-                    mask.light,
-                    Tracing::Bvh,
-                )
-            });
-            let c = truth::compare(mask, exact);
-            total.add(&c);
-            per_light.push((mask.light, c));
-            exact_masks.push(exact.clone());
-        }
+        let m = self.exact.measure(self.scene, gbuffer, &frame.masks);
         Ok(Capture {
             frame,
-            exact: exact_masks,
-            total,
-            per_light,
+            exact: m.exact,
+            total: m.total,
+            per_light: m.per_light,
         })
     }
 

@@ -9,6 +9,7 @@ pub mod builtin;
 pub mod camera;
 pub mod file;
 pub mod light;
+pub mod load;
 pub mod path;
 pub mod shapes;
 pub mod vis;

@@ -88,6 +88,15 @@ pub fn warnings(scene: &Scene, reference: &Reference) -> Vec<String> {
         .collect()
 }
 
+/// [`warnings`] with the scene's reference built for them (none, and no reference, without
+/// lights).
+pub fn scene_warnings(scene: &Scene) -> Vec<String> {
+    if scene.lights.is_empty() {
+        return Vec::new();
+    }
+    warnings(scene, &Reference::build(scene))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

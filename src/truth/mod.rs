@@ -2,9 +2,11 @@
 
 pub mod enclosure;
 pub mod masks;
+pub mod measure;
 pub mod metrics;
 pub mod reference;
 
 pub use masks::{Tracing, reference_mask};
+pub use measure::{ExactMasks, Measurement, exact_mask, measure, measure_with};
 pub use metrics::{Counts, Rates, compare, compare_where, error_image, error_image_all};
 pub use reference::{Blocker, Reference};

@@ -4,7 +4,7 @@
 use crate::frame::Frame;
 use crate::images::Rgba;
 use crate::scene::Scene;
-use crate::truth::{self, Counts, Reference, Tracing};
+use crate::truth::{self, Counts, Reference};
 use std::sync::Arc;
 use std::sync::atomic::{AtomicUsize, Ordering};
 use std::thread::JoinHandle;
@@ -40,33 +40,21 @@ impl ErrorJob {
             let gbuffer = gbuffer?;
             let reference = Reference::build(&scene);
             progress.fetch_add(1, Ordering::Relaxed);
-            let mut exact = Vec::with_capacity(masks.len());
-            let mut total = Counts::default();
-            let mut per_light = Vec::new();
-            for m in &masks {
-                let e = truth::reference_mask(
-                    &reference,
-                    &gbuffer,
-                    &scene.lights[m.light],
-                    m.light,
-                    Tracing::Bvh,
-                );
-                let c = truth::compare(m, &e);
-                total.add(&c);
-                per_light.push((m.light, c));
-                exact.push(e);
+            let measured = truth::measure_with(&masks, |m| {
+                let e = truth::exact_mask(&scene, &reference, &gbuffer, m);
                 progress.fetch_add(1, Ordering::Relaxed);
-            }
+                e
+            });
             let rendered: Vec<&crate::images::Mask> = masks.iter().collect();
-            let exact_refs: Vec<&crate::images::Mask> = exact.iter().collect();
+            let exact_refs: Vec<&crate::images::Mask> = measured.exact.iter().collect();
             Some(ErrorResult {
                 image: Rgba {
                     width,
                     height,
                     data: truth::error_image_all(&rendered, &exact_refs),
                 },
-                total,
-                per_light,
+                total: measured.total,
+                per_light: measured.per_light,
             })
         });
         ErrorJob {

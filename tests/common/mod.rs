@@ -76,12 +76,12 @@ pub fn load_scene_file(name: &str) -> (Scene, shadowlab::scene::file::LoadReport
 /// Loads a scene file by its path under the repository.
 pub fn load_asset(relative: &str) -> (Scene, shadowlab::scene::file::LoadReport, Options) {
     let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join(relative);
-    let file = shadowlab::scene::file::SceneFile::read(&path).unwrap_or_else(|e| panic!("{e}"));
-    let mut options = test_options();
-    options.apply_toml(&file.options).unwrap();
-    options.q3.progress = false;
-    let (scene, report) = file.build(&options).unwrap_or_else(|e| panic!("{e}"));
-    (scene, report, options)
+    let loaded = shadowlab::scene::load::load_file_over(test_options(), &path, |mut options| {
+        options.q3.progress = false;
+        Ok::<_, std::convert::Infallible>(options)
+    })
+    .unwrap_or_else(|e| panic!("{e}"));
+    (loaded.scene, loaded.report, loaded.options)
 }
 
 /// A scene from world-space meshes with their materials, lights and a camera.
@@ -132,8 +132,7 @@ pub struct Measurer {
     // Dropped before the context its GL objects live in.
     renderer: shadowlab::gl::Renderer,
     ctx: shadowlab::gl::GlContext,
-    reference: shadowlab::truth::Reference,
-    exact: std::collections::HashMap<(u32, u32, usize), shadowlab::images::Mask>,
+    exact: shadowlab::truth::ExactMasks,
 }
 
 /// One configuration's result.
@@ -161,8 +160,7 @@ impl Measurer {
             scene,
             ctx,
             renderer,
-            reference,
-            exact: std::collections::HashMap::new(),
+            exact: shadowlab::truth::ExactMasks::with_reference(reference),
         }
     }
 
@@ -179,7 +177,7 @@ impl Measurer {
 
     /// The exact mask of light `l` for frames of this size.
     pub fn exact(&self, w: u32, h: u32, l: usize) -> &shadowlab::images::Mask {
-        &self.exact[&(w, h, l)]
+        self.exact.get(w, h, l).unwrap()
     }
 
     pub fn measure(&mut self, options: &Options) -> Measured {
@@ -195,28 +193,11 @@ impl Measurer {
             )
             .unwrap_or_else(|e| panic!("{e}"));
         let g = frame.gbuffer.as_ref().unwrap();
-        let mut total = shadowlab::truth::Counts::default();
-        let mut per_light = Vec::new();
-        for m in &frame.masks {
-            let key = (frame.width, frame.height, m.light);
-            let (scene, reference) = (&self.scene, &self.reference);
-            let exact = self.exact.entry(key).or_insert_with(|| {
-                shadowlab::truth::reference_mask(
-                    reference,
-                    g,
-                    &scene.lights[m.light],
-                    m.light,
-                    shadowlab::truth::Tracing::Bvh,
-                )
-            });
-            let c = shadowlab::truth::compare(m, exact);
-            total.add(&c);
-            per_light.push((m.light, c));
-        }
+        let m = self.exact.measure(&self.scene, g, &frame.masks);
         Measured {
             frame,
-            per_light,
-            total,
+            per_light: m.per_light,
+            total: m.total,
         }
     }
 }

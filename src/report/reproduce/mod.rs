@@ -25,7 +25,8 @@ use super::table::Table;
 use crate::gl::{RenderError, Renderer};
 use crate::options::{OptionError, Options};
 use crate::scene::Scene;
-use crate::scene::file::{SceneFile, SceneFileError};
+use crate::scene::file::SceneFileError;
+use crate::scene::load::{LoadError, Loaded, load_file};
 use indicatif::{ProgressBar, ProgressStyle};
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
@@ -184,19 +185,25 @@ fn load_scene(
         name: name.to_string(),
         source: Box::new(e),
     };
-    let file = SceneFile::read(&path).map_err(wrap)?;
-    let mut options = Options::default();
-    options.apply_toml(&file.options)?;
-    for s in &settings.sets {
-        options.set_assignment(s)?;
-    }
-    options.set("width", &settings.width.to_string())?;
-    options.set("height", &settings.height.to_string())?;
-    options.validate()?;
-    let (scene, report) = file.build(&options).map_err(wrap)?;
+    let overrides = |mut options: Options| -> Result<Options, OptionError> {
+        for s in &settings.sets {
+            options.set_assignment(s)?;
+        }
+        options.set("width", &settings.width.to_string())?;
+        options.set("height", &settings.height.to_string())?;
+        options.validate()?;
+        Ok(options)
+    };
+    let Loaded {
+        scene,
+        options,
+        report,
+    } = load_file(&path, overrides).map_err(|e| match e {
+        LoadError::File(e) => wrap(e),
+        LoadError::Options(e) | LoadError::Overrides(e) => ReproduceError::Option(e),
+    })?;
     let mut warnings = report.warnings;
-    let reference = crate::truth::Reference::build(&scene);
-    warnings.extend(crate::truth::enclosure::warnings(&scene, &reference));
+    warnings.extend(crate::truth::enclosure::scene_warnings(&scene));
     Ok((scene, options, warnings))
 }
 
