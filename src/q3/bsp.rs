@@ -10,6 +10,7 @@
 //! One defect of shipped maps is repaired instead of rejected and reported in `Bsp::warnings`:
 //! a surface's fog number outside the fogs lump (shadowlab draws no fog).
 
+use super::bytes::{array_at, f32_at, i32_at, ivec3_at, name_at, vec3_at};
 pub use crate::scene::vis::{Leaf, Node, Plane, Vis};
 use thiserror::Error;
 
@@ -188,18 +189,6 @@ pub struct Bsp {
     pub warnings: Vec<String>,
 }
 
-fn i32_at(d: &[u8], off: usize) -> i32 {
-    i32::from_le_bytes([d[off], d[off + 1], d[off + 2], d[off + 3]])
-}
-fn f32_at(d: &[u8], off: usize) -> f32 {
-    f32::from_le_bytes([d[off], d[off + 1], d[off + 2], d[off + 3]])
-}
-fn name_at(d: &[u8], off: usize, len: usize) -> String {
-    let raw = &d[off..off + len];
-    let end = raw.iter().position(|&b| b == 0).unwrap_or(len);
-    String::from_utf8_lossy(&raw[..end]).into_owned()
-}
-
 /// A lump's bytes and its record count.
 struct Lump<'a> {
     id: usize,
@@ -298,19 +287,89 @@ fn finite(
     }
 }
 
-fn vec3(d: &[u8], off: usize) -> [f32; 3] {
-    [f32_at(d, off), f32_at(d, off + 4), f32_at(d, off + 8)]
-}
-fn ivec3(d: &[u8], off: usize) -> [i32; 3] {
-    [i32_at(d, off), i32_at(d, off + 4), i32_at(d, off + 8)]
-}
+// Lump ids, in file order (see `LUMP_NAMES`).
+const ENTITIES: usize = 0;
+const SHADERS: usize = 1;
+const PLANES: usize = 2;
+const NODES: usize = 3;
+const LEAFS: usize = 4;
+const LEAF_SURFACES: usize = 5;
+const LEAF_BRUSHES: usize = 6;
+const MODELS: usize = 7;
+const BRUSHES: usize = 8;
+const BRUSH_SIDES: usize = 9;
+const DRAW_VERTS: usize = 10;
+const DRAW_INDEXES: usize = 11;
+const FOGS: usize = 12;
+const SURFACES: usize = 13;
+const LIGHTMAPS: usize = 14;
+const LIGHT_GRID: usize = 15;
+const VISIBILITY: usize = 16;
 
 /// Parses and validates a whole IBSP v46 file.
 pub fn parse(file: &[u8]) -> Result<Bsp, BspError> {
+    let l = lumps(file)?;
+    let entities = name_at(l[ENTITIES].data, 0, l[ENTITIES].data.len());
+    let shaders = shaders(&l[SHADERS]);
+    let planes = planes(&l[PLANES])?;
+    let nodes = nodes(&l)?;
+    // Visibility comes before leafs so their clusters can be checked against it.
+    let vis = vis(l[VISIBILITY].data)?;
+    let leafs = leafs(&l, vis.as_ref().map(|v| v.num_clusters as usize))?;
+    let leaf_surfaces = l[LEAF_SURFACES].parse(|i, r| {
+        index(
+            "leafsurfaces",
+            i,
+            "surface",
+            i32_at(r, 0),
+            l[SURFACES].count(),
+        )
+    })?;
+    let leaf_brushes = l[LEAF_BRUSHES]
+        .parse(|i, r| index("leafbrushes", i, "brush", i32_at(r, 0), l[BRUSHES].count()))?;
+    let models = models(&l)?;
+    let brushes = brushes(&l)?;
+    let brush_sides = brush_sides(&l)?;
+    let vertices = vertices(&l[DRAW_VERTS])?;
+    let indexes = indexes(&l)?;
+    let fogs = fogs(&l)?;
+    let mut warnings = Vec::new();
+    let surfaces = surfaces(&l, &mut warnings)?;
+    check_mesh_indexes(&surfaces, &indexes)?;
+    let lightmaps = (0..l[LIGHTMAPS].count())
+        .map(|i| l[LIGHTMAPS].record(i).to_vec())
+        .collect();
+    let light_grid = l[LIGHT_GRID].parse(|_, r| Ok(array_at(r, 0)))?;
+
+    Ok(Bsp {
+        entities,
+        shaders,
+        planes,
+        nodes,
+        leafs,
+        leaf_surfaces,
+        leaf_brushes,
+        models,
+        brushes,
+        brush_sides,
+        vertices,
+        indexes,
+        fogs,
+        surfaces,
+        lightmaps,
+        light_grid,
+        vis,
+        warnings,
+    })
+}
+
+/// Checks the header and cuts the file into its 17 lumps, each inside the file and a whole
+/// number of records.
+fn lumps(file: &[u8]) -> Result<Vec<Lump<'_>>, BspError> {
     if file.len() < HEADER_BYTES {
         return Err(BspError::TooSmall(file.len()));
     }
-    let magic = [file[0], file[1], file[2], file[3]];
+    let magic: [u8; 4] = array_at(file, 0);
     if &magic != b"IBSP" {
         return Err(BspError::BadMagic(magic));
     }
@@ -343,28 +402,26 @@ pub fn parse(file: &[u8]) -> Result<Bsp, BspError> {
             data: &file[o..o + l],
         });
     }
-    let count = |id: usize| lumps[id].count();
-    let (n_shaders, n_planes, n_nodes, n_leafs) = (count(1), count(2), count(3), count(4));
-    let (n_leaf_surfaces, n_leaf_brushes, n_brushes, n_sides) =
-        (count(5), count(6), count(8), count(9));
-    let (n_verts, n_indexes, n_fogs, n_surfaces, n_lightmaps) =
-        (count(10), count(11), count(12), count(13), count(14));
+    Ok(lumps)
+}
 
-    let entities = {
-        let d = lumps[0].data;
-        let end = d.iter().position(|&b| b == 0).unwrap_or(d.len());
-        String::from_utf8_lossy(&d[..end]).into_owned()
-    };
-    let shaders = lumps[1].parse(|_, r| {
-        Ok(BspShader {
-            name: name_at(r, 0, 64),
-            surface_flags: i32_at(r, 64),
-            content_flags: i32_at(r, 68),
+fn shaders(lump: &Lump) -> Vec<BspShader> {
+    (0..lump.count())
+        .map(|i| {
+            let r = lump.record(i);
+            BspShader {
+                name: name_at(r, 0, 64),
+                surface_flags: i32_at(r, 64),
+                content_flags: i32_at(r, 68),
+            }
         })
-    })?;
-    let planes = lumps[2].parse(|i, r| {
+        .collect()
+}
+
+fn planes(lump: &Lump) -> Result<Vec<Plane>, BspError> {
+    lump.parse(|i, r| {
         let p = Plane {
-            normal: vec3(r, 0),
+            normal: vec3_at(r, 0),
             dist: f32_at(r, 12),
         };
         finite(
@@ -374,8 +431,12 @@ pub fn parse(file: &[u8]) -> Result<Bsp, BspError> {
             &[p.normal[0], p.normal[1], p.normal[2], p.dist],
         )?;
         Ok(p)
-    })?;
-    let nodes = lumps[3].parse(|i, r| {
+    })
+}
+
+fn nodes(l: &[Lump]) -> Result<Vec<Node>, BspError> {
+    let (n_planes, n_nodes, n_leafs) = (l[PLANES].count(), l[NODES].count(), l[LEAFS].count());
+    l[NODES].parse(|i, r| {
         let plane = index("nodes", i, "plane", i32_at(r, 0), n_planes)?;
         let children = [i32_at(r, 4), i32_at(r, 8)];
         for (c, field) in children.iter().zip(["children[0]", "children[1]"]) {
@@ -397,65 +458,61 @@ pub fn parse(file: &[u8]) -> Result<Bsp, BspError> {
         Ok(Node {
             plane,
             children,
-            mins: ivec3(r, 12),
-            maxs: ivec3(r, 24),
+            mins: ivec3_at(r, 12),
+            maxs: ivec3_at(r, 24),
         })
-    })?;
+    })
+}
 
-    // Visibility comes before leafs so their clusters can be checked against it.
-    let vis = {
-        let d = lumps[16].data;
-        if d.is_empty() {
-            None
-        } else {
-            if d.len() < 8 {
-                return Err(BspError::Invalid {
-                    lump: "visibility",
-                    record: 0,
-                    field: "length",
-                    value: d.len() as i64,
-                    why: "shorter than its 8-byte header",
-                });
-            }
-            let (nc, cb) = (i32_at(d, 0), i32_at(d, 4));
-            if nc < 0 {
-                return Err(BspError::Invalid {
-                    lump: "visibility",
-                    record: 0,
-                    field: "numClusters",
-                    value: nc as i64,
-                    why: "negative",
-                });
-            }
-            if (cb as i64) < (nc as i64 + 7) / 8 {
-                return Err(BspError::Invalid {
-                    lump: "visibility",
-                    record: 0,
-                    field: "clusterBytes",
-                    value: cb as i64,
-                    why: "too small for one bit per cluster",
-                });
-            }
-            let needed = 8 + nc as u64 * cb as u64;
-            if needed > d.len() as u64 {
-                return Err(BspError::Invalid {
-                    lump: "visibility",
-                    record: 0,
-                    field: "numClusters*clusterBytes",
-                    value: needed as i64,
-                    why: "more than the lump holds",
-                });
-            }
-            Some(Vis {
-                num_clusters: nc as u32,
-                cluster_bytes: cb as u32,
-                data: d[8..needed as usize].to_vec(),
-            })
-        }
+/// The visibility lump `d`: None when empty (a map compiled without vis).
+fn vis(d: &[u8]) -> Result<Option<Vis>, BspError> {
+    if d.is_empty() {
+        return Ok(None);
+    }
+    let invalid = |field, value, why| BspError::Invalid {
+        lump: "visibility",
+        record: 0,
+        field,
+        value,
+        why,
     };
-    let n_clusters = vis.as_ref().map(|v| v.num_clusters as usize);
+    if d.len() < 8 {
+        return Err(invalid(
+            "length",
+            d.len() as i64,
+            "shorter than its 8-byte header",
+        ));
+    }
+    let (nc, cb) = (i32_at(d, 0), i32_at(d, 4));
+    if nc < 0 {
+        return Err(invalid("numClusters", nc as i64, "negative"));
+    }
+    if (cb as i64) < (nc as i64 + 7) / 8 {
+        return Err(invalid(
+            "clusterBytes",
+            cb as i64,
+            "too small for one bit per cluster",
+        ));
+    }
+    let needed = 8 + nc as u64 * cb as u64;
+    if needed > d.len() as u64 {
+        return Err(invalid(
+            "numClusters*clusterBytes",
+            needed as i64,
+            "more than the lump holds",
+        ));
+    }
+    Ok(Some(Vis {
+        num_clusters: nc as u32,
+        cluster_bytes: cb as u32,
+        data: d[8..needed as usize].to_vec(),
+    }))
+}
 
-    let leafs = lumps[4].parse(|i, r| {
+/// Leafs, their clusters checked against `n_clusters` (None: the map has no vis).
+fn leafs(l: &[Lump], n_clusters: Option<usize>) -> Result<Vec<Leaf>, BspError> {
+    let (n_leaf_surfaces, n_leaf_brushes) = (l[LEAF_SURFACES].count(), l[LEAF_BRUSHES].count());
+    l[LEAFS].parse(|i, r| {
         let cluster = i32_at(r, 0);
         match n_clusters {
             Some(n) if cluster >= 0 => {
@@ -491,20 +548,20 @@ pub fn parse(file: &[u8]) -> Result<Bsp, BspError> {
         Ok(Leaf {
             cluster,
             area: i32_at(r, 4),
-            mins: ivec3(r, 8),
-            maxs: ivec3(r, 20),
+            mins: ivec3_at(r, 8),
+            maxs: ivec3_at(r, 20),
             first_leaf_surface: fs,
             num_leaf_surfaces: ns,
             first_leaf_brush: fb,
             num_leaf_brushes: nb,
         })
-    })?;
-    let leaf_surfaces =
-        lumps[5].parse(|i, r| index("leafsurfaces", i, "surface", i32_at(r, 0), n_surfaces))?;
-    let leaf_brushes =
-        lumps[6].parse(|i, r| index("leafbrushes", i, "brush", i32_at(r, 0), n_brushes))?;
-    let models = lumps[7].parse(|i, r| {
-        let (mins, maxs) = (vec3(r, 0), vec3(r, 12));
+    })
+}
+
+fn models(l: &[Lump]) -> Result<Vec<Model>, BspError> {
+    let (n_surfaces, n_brushes) = (l[SURFACES].count(), l[BRUSHES].count());
+    l[MODELS].parse(|i, r| {
+        let (mins, maxs) = (vec3_at(r, 0), vec3_at(r, 12));
         finite("models", i, "mins/maxs", &[mins, maxs].concat())?;
         let (fs, ns) = span(
             "models",
@@ -530,8 +587,12 @@ pub fn parse(file: &[u8]) -> Result<Bsp, BspError> {
             first_brush: fb,
             num_brushes: nb,
         })
-    })?;
-    let brushes = lumps[8].parse(|i, r| {
+    })
+}
+
+fn brushes(l: &[Lump]) -> Result<Vec<Brush>, BspError> {
+    let (n_sides, n_shaders) = (l[BRUSH_SIDES].count(), l[SHADERS].count());
+    l[BRUSHES].parse(|i, r| {
         let (first_side, num_sides) = span(
             "brushes",
             i,
@@ -545,34 +606,51 @@ pub fn parse(file: &[u8]) -> Result<Bsp, BspError> {
             num_sides,
             shader: index("brushes", i, "shader", i32_at(r, 8), n_shaders)?,
         })
-    })?;
-    let brush_sides = lumps[9].parse(|i, r| {
+    })
+}
+
+fn brush_sides(l: &[Lump]) -> Result<Vec<BrushSide>, BspError> {
+    let (n_planes, n_shaders) = (l[PLANES].count(), l[SHADERS].count());
+    l[BRUSH_SIDES].parse(|i, r| {
         Ok(BrushSide {
             plane: index("brushsides", i, "plane", i32_at(r, 0), n_planes)?,
             shader: index("brushsides", i, "shader", i32_at(r, 4), n_shaders)?,
         })
-    })?;
-    let vertices = lumps[10].parse(|i, r| {
+    })
+}
+
+fn vertices(lump: &Lump) -> Result<Vec<DrawVert>, BspError> {
+    lump.parse(|i, r| {
         let v = DrawVert {
-            position: vec3(r, 0),
+            position: vec3_at(r, 0),
             st: [f32_at(r, 12), f32_at(r, 16)],
             lightmap: [f32_at(r, 20), f32_at(r, 24)],
-            normal: vec3(r, 28),
-            color: [r[40], r[41], r[42], r[43]],
+            normal: vec3_at(r, 28),
+            color: array_at(r, 40),
         };
         finite("drawverts", i, "position", &v.position)?;
         // Texture coordinates and normals of unused vertices may be garbage in real maps; they
         // are sanitised where surfaces use them, not rejected.
         Ok(v)
-    })?;
-    let indexes = lumps[11].parse(|i, r| {
+    })
+}
+
+/// Draw indexes, only checked non-negative here: they are relative to a surface's first vertex
+/// (see [`check_mesh_indexes`]).
+fn indexes(l: &[Lump]) -> Result<Vec<u32>, BspError> {
+    let n_verts = l[DRAW_VERTS].count();
+    l[DRAW_INDEXES].parse(|i, r| {
         let v = i32_at(r, 0);
         if v < 0 {
             return Err(range_err("drawindexes", i, "index", v as i64, n_verts));
         }
         Ok(v as u32)
-    })?;
-    let fogs = lumps[12].parse(|i, r| {
+    })
+}
+
+fn fogs(l: &[Lump]) -> Result<Vec<Fog>, BspError> {
+    let n_brushes = l[BRUSHES].count();
+    l[FOGS].parse(|i, r| {
         let brush = i32_at(r, 64);
         if brush >= 0 {
             index("fogs", i, "brushNum", brush, n_brushes)?;
@@ -582,12 +660,14 @@ pub fn parse(file: &[u8]) -> Result<Bsp, BspError> {
             brush,
             visible_side: i32_at(r, 68),
         })
-    })?;
-    let mut warnings = Vec::new();
+    })
+}
+
+/// Surfaces; a fog number outside the fogs lump is cleared and counted in one warning.
+fn surfaces(l: &[Lump], warnings: &mut Vec<String>) -> Result<Vec<Surface>, BspError> {
+    let n_fogs = l[FOGS].count();
     let mut bad_fogs = 0usize;
-    let surfaces = lumps[13].parse(|i, r| {
-        let lump = "surfaces";
-        let shader = index(lump, i, "shaderNum", i32_at(r, 0), n_shaders)?;
+    let surfaces = l[SURFACES].parse(|i, r| {
         let mut fog = i32_at(r, 4);
         if fog < -1 || fog as i64 >= n_fogs as i64 {
             // Fallback: shipped maps (OpenArena's aggressor) reference fogs they lack; shadowlab
@@ -595,102 +675,121 @@ pub fn parse(file: &[u8]) -> Result<Bsp, BspError> {
             bad_fogs += 1;
             fog = -1;
         }
-        let kind = match i32_at(r, 8) {
-            1 => SurfaceType::Planar,
-            2 => SurfaceType::Patch,
-            3 => SurfaceType::TriangleSoup,
-            4 => SurfaceType::Flare,
-            other => {
-                return Err(BspError::Invalid {
-                    lump,
-                    record: i,
-                    field: "surfaceType",
-                    value: other as i64,
-                    why: "not 1 (planar), 2 (patch), 3 (triangle soup) or 4 (flare)",
-                });
-            }
-        };
-        let (first_vert, num_verts) = span(
-            lump,
-            i,
-            "firstVert/numVerts",
-            i32_at(r, 12),
-            i32_at(r, 16),
-            n_verts,
-        )?;
-        let (first_index, num_indexes) = span(
-            lump,
-            i,
-            "firstIndex/numIndexes",
-            i32_at(r, 20),
-            i32_at(r, 24),
-            n_indexes,
-        )?;
-        let lightmap = i32_at(r, 28);
-        if lightmap >= 0 {
-            index(lump, i, "lightmapNum", lightmap, n_lightmaps)?;
-        }
-        let (pw, ph) = (i32_at(r, 96), i32_at(r, 100));
-        let mut s = Surface {
-            shader,
-            fog,
-            kind,
-            first_vert,
-            num_verts,
-            first_index,
-            num_indexes,
-            lightmap,
-            lightmap_origin: vec3(r, 48),
-            lightmap_vecs: [vec3(r, 60), vec3(r, 72), vec3(r, 84)],
-            patch_width: 0,
-            patch_height: 0,
-        };
-        match kind {
-            SurfaceType::Patch => {
-                for (v, field) in [(pw, "patchWidth"), (ph, "patchHeight")] {
-                    if !(3..=1024).contains(&v) || v % 2 == 0 {
-                        return Err(BspError::Invalid {
-                            lump,
-                            record: i,
-                            field,
-                            value: v as i64,
-                            why: "a patch side must be odd and between 3 and 1024",
-                        });
-                    }
-                }
-                if pw as i64 * ph as i64 != num_verts as i64 {
-                    return Err(BspError::Invalid {
-                        lump,
-                        record: i,
-                        field: "patchWidth*patchHeight",
-                        value: pw as i64 * ph as i64,
-                        why: "differs from numVerts",
-                    });
-                }
-                s.patch_width = pw as u32;
-                s.patch_height = ph as u32;
-            }
-            SurfaceType::Planar | SurfaceType::TriangleSoup => {
-                if num_indexes % 3 != 0 {
-                    return Err(BspError::Invalid {
-                        lump,
-                        record: i,
-                        field: "numIndexes",
-                        value: num_indexes as i64,
-                        why: "not a multiple of 3",
-                    });
-                }
-            }
-            SurfaceType::Flare => {}
-        }
-        Ok(s)
+        surface(l, i, r, fog)
     })?;
     if bad_fogs > 0 {
         warnings.push(format!(
             "{bad_fogs} surfaces name a fog outside the {n_fogs} fogs of the map; their fog is ignored"
         ));
     }
-    // Mesh indices are relative to the surface's first vertex.
+    Ok(surfaces)
+}
+
+/// Surface record `i`, its fog already checked.
+fn surface(l: &[Lump], i: usize, r: &[u8], fog: i32) -> Result<Surface, BspError> {
+    let lump = "surfaces";
+    let shader = index(lump, i, "shaderNum", i32_at(r, 0), l[SHADERS].count())?;
+    let kind = surface_type(i, i32_at(r, 8))?;
+    let (first_vert, num_verts) = span(
+        lump,
+        i,
+        "firstVert/numVerts",
+        i32_at(r, 12),
+        i32_at(r, 16),
+        l[DRAW_VERTS].count(),
+    )?;
+    let (first_index, num_indexes) = span(
+        lump,
+        i,
+        "firstIndex/numIndexes",
+        i32_at(r, 20),
+        i32_at(r, 24),
+        l[DRAW_INDEXES].count(),
+    )?;
+    let lightmap = i32_at(r, 28);
+    if lightmap >= 0 {
+        index(lump, i, "lightmapNum", lightmap, l[LIGHTMAPS].count())?;
+    }
+    let mut s = Surface {
+        shader,
+        fog,
+        kind,
+        first_vert,
+        num_verts,
+        first_index,
+        num_indexes,
+        lightmap,
+        lightmap_origin: vec3_at(r, 48),
+        lightmap_vecs: [vec3_at(r, 60), vec3_at(r, 72), vec3_at(r, 84)],
+        patch_width: 0,
+        patch_height: 0,
+    };
+    (s.patch_width, s.patch_height) = surface_shape(&s, i, i32_at(r, 96), i32_at(r, 100))?;
+    Ok(s)
+}
+
+fn surface_type(i: usize, value: i32) -> Result<SurfaceType, BspError> {
+    match value {
+        1 => Ok(SurfaceType::Planar),
+        2 => Ok(SurfaceType::Patch),
+        3 => Ok(SurfaceType::TriangleSoup),
+        4 => Ok(SurfaceType::Flare),
+        other => Err(BspError::Invalid {
+            lump: "surfaces",
+            record: i,
+            field: "surfaceType",
+            value: other as i64,
+            why: "not 1 (planar), 2 (patch), 3 (triangle soup) or 4 (flare)",
+        }),
+    }
+}
+
+/// Checks what surface record `i`'s type requires of its size: a patch's control grid
+/// (`pw` x `ph`, returned), whole triangles for polygons and meshes. Other types get (0, 0).
+fn surface_shape(s: &Surface, i: usize, pw: i32, ph: i32) -> Result<(u32, u32), BspError> {
+    let lump = "surfaces";
+    match s.kind {
+        SurfaceType::Patch => {
+            for (v, field) in [(pw, "patchWidth"), (ph, "patchHeight")] {
+                if !(3..=1024).contains(&v) || v % 2 == 0 {
+                    return Err(BspError::Invalid {
+                        lump,
+                        record: i,
+                        field,
+                        value: v as i64,
+                        why: "a patch side must be odd and between 3 and 1024",
+                    });
+                }
+            }
+            if pw as i64 * ph as i64 != s.num_verts as i64 {
+                return Err(BspError::Invalid {
+                    lump,
+                    record: i,
+                    field: "patchWidth*patchHeight",
+                    value: pw as i64 * ph as i64,
+                    why: "differs from numVerts",
+                });
+            }
+            Ok((pw as u32, ph as u32))
+        }
+        SurfaceType::Planar | SurfaceType::TriangleSoup => {
+            if !s.num_indexes.is_multiple_of(3) {
+                return Err(BspError::Invalid {
+                    lump,
+                    record: i,
+                    field: "numIndexes",
+                    value: s.num_indexes as i64,
+                    why: "not a multiple of 3",
+                });
+            }
+            Ok((0, 0))
+        }
+        SurfaceType::Flare => Ok((0, 0)),
+    }
+}
+
+/// Mesh indices are relative to the surface's first vertex: each must be below its `numVerts`.
+fn check_mesh_indexes(surfaces: &[Surface], indexes: &[u32]) -> Result<(), BspError> {
     for (i, s) in surfaces.iter().enumerate() {
         if matches!(s.kind, SurfaceType::Planar | SurfaceType::TriangleSoup) {
             let range = s.first_index as usize..(s.first_index + s.num_indexes) as usize;
@@ -705,35 +804,7 @@ pub fn parse(file: &[u8]) -> Result<Bsp, BspError> {
             }
         }
     }
-    let lightmaps = (0..n_lightmaps)
-        .map(|i| lumps[14].record(i).to_vec())
-        .collect();
-    let light_grid = lumps[15].parse(|_, r| {
-        let mut a = [0u8; 8];
-        a.copy_from_slice(r);
-        Ok(a)
-    })?;
-
-    Ok(Bsp {
-        entities,
-        shaders,
-        planes,
-        nodes,
-        leafs,
-        leaf_surfaces,
-        leaf_brushes,
-        models,
-        brushes,
-        brush_sides,
-        vertices,
-        indexes,
-        fogs,
-        surfaces,
-        lightmaps,
-        light_grid,
-        vis,
-        warnings,
-    })
+    Ok(())
 }
 
 impl Bsp {

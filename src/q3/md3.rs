@@ -4,6 +4,7 @@
 //! GL-free. Malformed input never panics: every count, offset and float is checked before it is
 //! used or allocated for, and each failure is a specific [`Md3Error`].
 
+use super::bytes::{self, array_at, f32_at, i16_at, i32_at, name_at, u16_at};
 use crate::geometry::Aabb;
 use crate::scene::Vertex;
 use glam::{Mat3, Mat4, Vec3};
@@ -192,32 +193,9 @@ impl Md3 {
     }
 }
 
-// Little-endian readers over slices whose bounds were checked by `region`; the zero fallback
-// only keeps them panic-free.
-fn bytes_at<const N: usize>(b: &[u8], at: usize) -> [u8; N] {
-    let mut out = [0u8; N];
-    if let Some(s) = at.checked_add(N).and_then(|end| b.get(at..end)) {
-        out.copy_from_slice(s);
-    }
-    out
-}
-fn i32_at(b: &[u8], at: usize) -> i32 {
-    i32::from_le_bytes(bytes_at(b, at))
-}
-fn f32_at(b: &[u8], at: usize) -> f32 {
-    f32::from_le_bytes(bytes_at(b, at))
-}
+// The little-endian readers of `bytes` read inside slices whose bounds `region` checked.
 fn vec3_at(b: &[u8], at: usize) -> Vec3 {
-    Vec3::new(f32_at(b, at), f32_at(b, at + 4), f32_at(b, at + 8))
-}
-/// A fixed-size, NUL-terminated name field, as lossy UTF-8.
-fn name_at(b: &[u8], at: usize, len: usize) -> String {
-    let raw = at
-        .checked_add(len)
-        .and_then(|end| b.get(at..end))
-        .unwrap_or(&[]);
-    let end = raw.iter().position(|&c| c == 0).unwrap_or(raw.len());
-    String::from_utf8_lossy(raw.get(..end).unwrap_or(&[])).into_owned()
+    Vec3::from_array(bytes::vec3_at(b, at))
 }
 
 /// The `count` records of `size` bytes at `offset` inside `container`, which starts at file offset
@@ -296,7 +274,7 @@ pub fn parse(data: &[u8]) -> Result<Md3, Md3Error> {
     if len < 4 {
         return Err(truncated_header());
     }
-    let magic: [u8; 4] = bytes_at(data, 0);
+    let magic: [u8; 4] = array_at(data, 0);
     if magic != MAGIC {
         return Err(Md3Error::BadMagic {
             what: "header".to_string(),
@@ -398,7 +376,7 @@ fn parse_surface(
     )?;
     // `region` accepted it, so it is a valid file offset.
     let start = start as usize;
-    let magic: [u8; 4] = bytes_at(header, 0);
+    let magic: [u8; 4] = array_at(header, 0);
     if magic != MAGIC {
         return Err(Md3Error::BadMagic {
             what: label,
@@ -509,9 +487,9 @@ fn parse_surface(
     let mut positions = Vec::with_capacity(num_frames * num_verts);
     let mut normals = Vec::with_capacity(num_frames * num_verts);
     for c in xyz_bytes.chunks_exact(XYZ_NORMAL_SIZE) {
-        let coord = |at| f32::from(i16::from_le_bytes(bytes_at(c, at))) * XYZ_SCALE;
+        let coord = |at| f32::from(i16_at(c, at)) * XYZ_SCALE;
         positions.push(Vec3::new(coord(0), coord(2), coord(4)));
-        normals.push(decode_normal(u16::from_le_bytes(bytes_at(c, 6))));
+        normals.push(decode_normal(u16_at(c, 6)));
     }
 
     let surface = Surface {

@@ -4,6 +4,7 @@
 
 pub mod bsp;
 pub mod builder;
+pub(crate) mod bytes;
 pub mod entities;
 pub mod md3;
 pub mod model;

@@ -153,7 +153,12 @@ pub fn add_world(
     q3: &Q3Options,
 ) -> Result<MapInfo, MapError> {
     let shift = q3.map_overbright_bits.saturating_sub(q3.overbright_bits);
-    let lightmap_base = builder.scene.lightmaps.len();
+    let mut faces = Faces {
+        lightmap_base: builder.scene.lightmaps.len(),
+        surface_map: vec![None; bsp.surfaces.len()],
+        shader_material: vec![None; bsp.shaders.len()],
+        triangles: Vec::new(),
+    };
     builder
         .scene
         .lightmaps
@@ -172,124 +177,17 @@ pub fn add_world(
         patch_level: q3.patch_level,
         ..MapCounts::default()
     };
-    let mut surface_map = vec![None; bsp.surfaces.len()];
-    let mut shader_material: Vec<Option<usize>> = vec![None; bsp.shaders.len()];
-    let mut all_triangles: Vec<[Vec3; 3]> = Vec::new();
     for model in &bsp.models[model_range] {
         let range =
             model.first_surface as usize..(model.first_surface + model.num_surfaces) as usize;
         for si in range {
-            let s = &bsp.surfaces[si];
-            let (vertices, indices, kind) = match s.kind {
-                SurfaceType::Flare => {
-                    counts.faces.billboard += 1;
-                    continue;
-                }
-                SurfaceType::Planar | SurfaceType::TriangleSoup => {
-                    let verts =
-                        &bsp.vertices[s.first_vert as usize..(s.first_vert + s.num_verts) as usize];
-                    let vertices: Vec<Vertex> =
-                        verts.iter().map(|v| vertex_from(v, shift)).collect();
-                    // Quake 3 winds front faces clockwise; shadowlab's are counter-clockwise.
-                    let mut indices = Vec::with_capacity(s.num_indexes as usize);
-                    let idx = &bsp.indexes
-                        [s.first_index as usize..(s.first_index + s.num_indexes) as usize];
-                    for t in idx.chunks_exact(3) {
-                        indices.extend_from_slice(&[t[0], t[2], t[1]]);
-                    }
-                    let kind = if s.kind == SurfaceType::Planar {
-                        counts.faces.polygon += 1;
-                        counts.triangles.polygon += indices.len() / 3;
-                        SurfaceKind::Polygon
-                    } else {
-                        counts.faces.mesh += 1;
-                        counts.triangles.mesh += indices.len() / 3;
-                        SurfaceKind::Mesh
-                    };
-                    (vertices, indices, kind)
-                }
-                SurfaceType::Patch => {
-                    let control =
-                        &bsp.vertices[s.first_vert as usize..(s.first_vert + s.num_verts) as usize];
-                    let t = patch::tessellate(
-                        control,
-                        s.patch_width as usize,
-                        s.patch_height as usize,
-                        q3.patch_level,
-                    )
-                    .map_err(|source| MapError::Patch {
-                        path: bsp_path.to_string(),
-                        surface: si,
-                        source,
-                    })?;
-                    counts.faces.patch += 1;
-                    counts.triangles.patch += t.indices.len() / 3;
-                    // Patch vertex colours: the first control point's (patches are lightmapped).
-                    let color = shift_color(
-                        [
-                            control[0].color[0],
-                            control[0].color[1],
-                            control[0].color[2],
-                        ],
-                        shift,
-                    );
-                    let vertices = t
-                        .vertices
-                        .iter()
-                        .map(|v| Vertex {
-                            position: v.position,
-                            normal: v.normal,
-                            uv: v.st,
-                            lightmap_uv: v.lightmap,
-                            color: [color[0], color[1], color[2], 255],
-                        })
-                        .collect();
-                    (vertices, t.indices, SurfaceKind::Patch)
-                }
-            };
-            counts.vertices.raw += vertices.len();
-            for t in indices.chunks_exact(3) {
-                all_triangles
-                    .push([0, 1, 2].map(|k| Vec3::from_array(vertices[t[k] as usize].position)));
+            let geometry = face_geometry(bsp, si, shift, q3, bsp_path, &mut counts)?;
+            if let Some(g) = geometry {
+                faces.add(builder, bsp, si, g, &mut counts);
             }
-            let shader = &bsp.shaders[s.shader as usize];
-            let material = builder.material(
-                &shader.name,
-                Some((shader.surface_flags, shader.content_flags)),
-            );
-            shader_material[s.shader as usize] = Some(material);
-            let m = &builder.scene.materials[material];
-            if !m.visible {
-                continue;
-            }
-            counts.drawn_triangles += indices.len() / 3;
-            if m.casts_shadows {
-                counts.caster_triangles += indices.len() / 3;
-            }
-            builder
-                .scene
-                .push_surface(&vertices, &indices, material, SurfaceOwner::World, kind);
-            let surface = builder.scene.surfaces.last_mut().expect("just pushed");
-            surface.lightmap = s.lightmap_index().map(|l| l + lightmap_base);
-            surface.baked = if s.lightmap_index().is_some() {
-                BakedLight::Lightmap
-            } else {
-                BakedLight::Vertex
-            };
-            surface_map[si] = Some(builder.scene.surfaces.len() as u32 - 1);
         }
     }
-    counts.triangles.total =
-        counts.triangles.polygon + counts.triangles.mesh + counts.triangles.patch;
-    let used: Vec<usize> = shader_material.iter().flatten().copied().collect();
-    counts.shaders = used.len();
-    counts.alpha_tested_shaders = used
-        .iter()
-        .filter(|&&m| builder.scene.materials[m].alpha_test.is_some())
-        .count();
-    let connectivity = Connectivity::build(all_triangles);
-    counts.vertices.welded = connectivity.positions.len();
-    counts.edges = connectivity.counts();
+    count_totals(&mut counts, builder, &faces);
 
     builder.scene.world = Some(Arc::new(WorldVis::new(
         BspTree {
@@ -299,7 +197,7 @@ pub fn add_world(
             leaf_surfaces: bsp.leaf_surfaces.clone(),
             vis: bsp.vis.clone(),
         },
-        surface_map,
+        faces.surface_map,
     )));
     let entities =
         entities::parse_entities(&bsp.entities).map_err(|source| MapError::Entities {
@@ -313,6 +211,183 @@ pub fn add_world(
         spawns,
         warnings: bsp.warnings.clone(),
     })
+}
+
+/// One face's triangles as the scene stores them.
+struct FaceGeometry {
+    vertices: Vec<Vertex>,
+    /// Counter-clockwise.
+    indices: Vec<u32>,
+    kind: SurfaceKind,
+}
+
+/// The geometry of BSP surface `si`, counted in `counts.faces` and `counts.triangles`; None for
+/// billboards (flares), which are counted and not loaded.
+fn face_geometry(
+    bsp: &Bsp,
+    si: usize,
+    shift: u32,
+    q3: &Q3Options,
+    bsp_path: &str,
+    counts: &mut MapCounts,
+) -> Result<Option<FaceGeometry>, MapError> {
+    let s = &bsp.surfaces[si];
+    let verts = || &bsp.vertices[s.first_vert as usize..(s.first_vert + s.num_verts) as usize];
+    let (vertices, indices, kind) =
+        match s.kind {
+            SurfaceType::Flare => {
+                counts.faces.billboard += 1;
+                return Ok(None);
+            }
+            SurfaceType::Planar | SurfaceType::TriangleSoup => {
+                let vertices: Vec<Vertex> = verts().iter().map(|v| vertex_from(v, shift)).collect();
+                // Quake 3 winds front faces clockwise; shadowlab's are counter-clockwise.
+                let mut indices = Vec::with_capacity(s.num_indexes as usize);
+                let idx =
+                    &bsp.indexes[s.first_index as usize..(s.first_index + s.num_indexes) as usize];
+                for t in idx.chunks_exact(3) {
+                    indices.extend_from_slice(&[t[0], t[2], t[1]]);
+                }
+                let kind = if s.kind == SurfaceType::Planar {
+                    counts.faces.polygon += 1;
+                    counts.triangles.polygon += indices.len() / 3;
+                    SurfaceKind::Polygon
+                } else {
+                    counts.faces.mesh += 1;
+                    counts.triangles.mesh += indices.len() / 3;
+                    SurfaceKind::Mesh
+                };
+                (vertices, indices, kind)
+            }
+            SurfaceType::Patch => {
+                let (vertices, indices) = patch_geometry(s, verts(), shift, q3.patch_level)
+                    .map_err(|source| MapError::Patch {
+                        path: bsp_path.to_string(),
+                        surface: si,
+                        source,
+                    })?;
+                counts.faces.patch += 1;
+                counts.triangles.patch += indices.len() / 3;
+                (vertices, indices, SurfaceKind::Patch)
+            }
+        };
+    Ok(Some(FaceGeometry {
+        vertices,
+        indices,
+        kind,
+    }))
+}
+
+/// A patch surface tessellated at `level` from its `control` points.
+fn patch_geometry(
+    s: &bsp::Surface,
+    control: &[DrawVert],
+    shift: u32,
+    level: u32,
+) -> Result<(Vec<Vertex>, Vec<u32>), PatchError> {
+    let t = patch::tessellate(
+        control,
+        s.patch_width as usize,
+        s.patch_height as usize,
+        level,
+    )?;
+    // Patch vertex colours: the first control point's (patches are lightmapped).
+    let color = shift_color(
+        [
+            control[0].color[0],
+            control[0].color[1],
+            control[0].color[2],
+        ],
+        shift,
+    );
+    let vertices = t
+        .vertices
+        .iter()
+        .map(|v| Vertex {
+            position: v.position,
+            normal: v.normal,
+            uv: v.st,
+            lightmap_uv: v.lightmap,
+            color: [color[0], color[1], color[2], 255],
+        })
+        .collect();
+    Ok((vertices, t.indices))
+}
+
+/// The world's faces as they are added: what the counts and the BSP visibility need of them.
+struct Faces {
+    /// Index of the map's first lightmap among the scene's.
+    lightmap_base: usize,
+    /// The scene surface of each BSP surface that is drawn.
+    surface_map: Vec<Option<u32>>,
+    /// The material of each BSP shader a loaded face uses.
+    shader_material: Vec<Option<usize>>,
+    /// Every loaded triangle, drawn or not, for the edge and welded-vertex counts.
+    triangles: Vec<[Vec3; 3]>,
+}
+
+impl Faces {
+    /// Adds BSP surface `si` with its geometry `g`: counted always, pushed to the scene when its
+    /// material is visible.
+    fn add(
+        &mut self,
+        builder: &mut SceneBuilder,
+        bsp: &Bsp,
+        si: usize,
+        g: FaceGeometry,
+        counts: &mut MapCounts,
+    ) {
+        let s = &bsp.surfaces[si];
+        counts.vertices.raw += g.vertices.len();
+        for t in g.indices.chunks_exact(3) {
+            self.triangles
+                .push([0, 1, 2].map(|k| Vec3::from_array(g.vertices[t[k] as usize].position)));
+        }
+        let shader = &bsp.shaders[s.shader as usize];
+        let material = builder.material(
+            &shader.name,
+            Some((shader.surface_flags, shader.content_flags)),
+        );
+        self.shader_material[s.shader as usize] = Some(material);
+        let m = &builder.scene.materials[material];
+        if !m.visible {
+            return;
+        }
+        counts.drawn_triangles += g.indices.len() / 3;
+        if m.casts_shadows {
+            counts.caster_triangles += g.indices.len() / 3;
+        }
+        builder.scene.push_surface(
+            &g.vertices,
+            &g.indices,
+            material,
+            SurfaceOwner::World,
+            g.kind,
+        );
+        let surface = builder.scene.surfaces.last_mut().expect("just pushed");
+        surface.lightmap = s.lightmap_index().map(|l| l + self.lightmap_base);
+        surface.baked = if s.lightmap_index().is_some() {
+            BakedLight::Lightmap
+        } else {
+            BakedLight::Vertex
+        };
+        self.surface_map[si] = Some(builder.scene.surfaces.len() as u32 - 1);
+    }
+}
+
+/// The counts that sum over every loaded face: triangle total, shaders, welded vertices, edges.
+fn count_totals(counts: &mut MapCounts, builder: &SceneBuilder, faces: &Faces) {
+    counts.triangles.total =
+        counts.triangles.polygon + counts.triangles.mesh + counts.triangles.patch;
+    let used: Vec<usize> = faces.shader_material.iter().flatten().copied().collect();
+    counts.shaders = used.len();
+    counts.alpha_tested_shaders = used
+        .iter()
+        .filter(|&&m| builder.scene.materials[m].alpha_test.is_some())
+        .count();
+    let connectivity = Connectivity::build(faces.triangles.iter().copied());
+    counts.vertices.welded = connectivity.positions.len();
+    counts.edges = connectivity.counts();
 }
 
 /// `maps/oa_dm1.bsp` → `oa_dm1`.

@@ -33,7 +33,7 @@ use super::authored::ShapeSection;
 use super::{Camera, Light, LightKind, Scene, builtin};
 use crate::options::Options;
 use crate::q3::builder::SceneBuilder;
-use crate::q3::entities;
+use crate::q3::entities::{self, Entity, SpawnPoint};
 use crate::q3::model::{self, ModelError};
 use crate::q3::pk3::{self, Vfs, VfsError};
 use crate::q3::rtlights;
@@ -298,112 +298,7 @@ impl SceneFile {
                     ..Scene::default()
                 },
             },
-            Some(map) => {
-                let vfs = self.vfs(map)?;
-                let shaders = load_shader_library(&vfs, &mut report.warnings);
-                let mut builder = SceneBuilder::new(&world::map_name(&map.bsp), &shaders);
-                let info = world::load_map(&mut builder, &vfs, &map.bsp, &options.q3)?;
-                report.warnings.extend(info.warnings.iter().cloned());
-                let mut lights = match self.lights.from {
-                    LightSource::None => Vec::new(),
-                    LightSource::Entities => entities::light_entities(&info.entities),
-                    LightSource::Rtlights => {
-                        let file = self.lights.rtlights.as_ref().ok_or_else(|| {
-                            self.invalid("[lights] from = \"rtlights\" needs rtlights = \"FILE\"")
-                        })?;
-                        let path = self.relative(file);
-                        let text = std::fs::read_to_string(&path).map_err(|source| {
-                            SceneFileError::Io {
-                                path: path.clone(),
-                                source,
-                            }
-                        })?;
-                        rtlights::parse_rtlights(&text)
-                            .map_err(|e| SceneFileError::Invalid {
-                                path,
-                                message: e.to_string(),
-                            })?
-                            .iter()
-                            .enumerate()
-                            .map(|(i, l)| l.to_light(&format!("rt{i}")))
-                            .collect()
-                    }
-                };
-                for name in &self.lights.exclude {
-                    if !lights.iter().any(|l| &l.name == name) {
-                        return Err(self.invalid(format!(
-                            "[lights] exclude names `{name}`, which the map's lights do not have"
-                        )));
-                    }
-                }
-                lights.retain(|l| !self.lights.exclude.contains(&l.name));
-                builder.scene.lights.append(&mut lights);
-                for (i, m) in self.model.iter().enumerate() {
-                    if !finite3(m.position) || !m.yaw.is_finite() {
-                        return Err(
-                            self.invalid(format!("[[model]] {i}: position and yaw must be finite"))
-                        );
-                    }
-                    let transform = Mat4::from_translation(Vec3::from_array(m.position))
-                        * Mat4::from_rotation_z(m.yaw.to_radians());
-                    match (&m.player, &m.md3) {
-                        (Some(p), None) => {
-                            let frames = m.legs_frame.zip(m.torso_frame);
-                            model::add_player(
-                                &mut builder,
-                                &vfs,
-                                p,
-                                m.skin.as_deref().unwrap_or("default"),
-                                frames,
-                                transform,
-                            )?;
-                        }
-                        (None, Some(path)) => {
-                            model::add_md3(
-                                &mut builder,
-                                &vfs,
-                                path,
-                                m.frame.unwrap_or(0),
-                                transform,
-                            )?;
-                        }
-                        _ => {
-                            return Err(self.invalid(format!(
-                                "[[model]] {i}: give exactly one of player or md3"
-                            )));
-                        }
-                    }
-                }
-                let (mut scene, missing) = builder.finish(&vfs, options.q3.progress);
-                if !missing.is_empty() {
-                    let names: Vec<&str> = missing.iter().map(|(n, _)| n.as_str()).collect();
-                    let w = format!(
-                        "{} textures missing, drawn as a magenta checker: {}",
-                        missing.len(),
-                        names.join(", ")
-                    );
-                    log::warn!("{w}");
-                    report.warnings.push(w);
-                }
-                scene.camera = match self.camera.spawn {
-                    Some(i) => {
-                        let s = info.spawns.get(i).ok_or_else(|| {
-                            self.invalid(format!(
-                                "[camera] spawn = {i}, but the map has {} spawn points",
-                                info.spawns.len()
-                            ))
-                        })?;
-                        Camera {
-                            position: s.origin + Vec3::Z * super::camera::Q3_VIEW_HEIGHT,
-                            yaw_deg: s.yaw_deg,
-                            ..Camera::default()
-                        }
-                    }
-                    None => Camera::default(),
-                };
-                report.counts = Some(info.counts);
-                scene
-            }
+            Some(map) => self.build_map(map, options, &mut report)?,
         };
         for (i, shape) in self.shape.iter().enumerate() {
             shape.add_to(i, &mut scene).map_err(|m| self.invalid(m))?;
@@ -416,25 +311,134 @@ impl SceneFile {
         if let Some(n) = &self.name {
             scene.name = n.clone();
         }
-        // A light inside a brush sees the backs of one-sided faces: the rasterized techniques
-        // ignore those, the exact reference does not, so every comparison would be off.
-        if let Some(world) = &scene.world {
-            for l in &scene.lights {
-                if world.cluster_at(l.position) < 0 {
-                    let w = format!(
-                        "light `{}` at {:?} is inside solid geometry (outside every BSP cluster): \
-                         its shadows will be wrong; move it into the playable space",
-                        l.name,
-                        l.position.to_array()
-                    );
-                    log::warn!("{w}");
-                    report.warnings.push(w);
-                }
-            }
-        }
+        warn_of_lights_in_solid(&scene, &mut report);
         scene.options = self.options.clone();
         report.load_ms = start.elapsed().as_secs_f64() * 1e3;
         Ok((scene, report))
+    }
+
+    /// The scene of `[map]`: the world, the map's lights the file asks for, the `[[model]]`s,
+    /// the camera at a spawn point when `[camera] spawn` names one.
+    fn build_map(
+        &self,
+        map: &MapSection,
+        options: &Options,
+        report: &mut LoadReport,
+    ) -> Result<Scene, SceneFileError> {
+        let vfs = self.vfs(map)?;
+        let shaders = load_shader_library(&vfs, &mut report.warnings);
+        let mut builder = SceneBuilder::new(&world::map_name(&map.bsp), &shaders);
+        let info = world::load_map(&mut builder, &vfs, &map.bsp, &options.q3)?;
+        report.warnings.extend(info.warnings.iter().cloned());
+        let mut lights = self.map_lights(&info.entities)?;
+        builder.scene.lights.append(&mut lights);
+        for (i, m) in self.model.iter().enumerate() {
+            self.add_model(&mut builder, &vfs, i, m)?;
+        }
+        let (mut scene, missing) = builder.finish(&vfs, options.q3.progress);
+        if !missing.is_empty() {
+            let names: Vec<&str> = missing.iter().map(|(n, _)| n.as_str()).collect();
+            let w = format!(
+                "{} textures missing, drawn as a magenta checker: {}",
+                missing.len(),
+                names.join(", ")
+            );
+            log::warn!("{w}");
+            report.warnings.push(w);
+        }
+        scene.camera = self.spawn_camera(&info.spawns)?;
+        report.counts = Some(info.counts);
+        Ok(scene)
+    }
+
+    /// The map's lights `[lights]` asks for (from its entities or an `.rtlights` file), less
+    /// those it excludes.
+    fn map_lights(&self, map_entities: &[Entity]) -> Result<Vec<Light>, SceneFileError> {
+        let mut lights = match self.lights.from {
+            LightSource::None => Vec::new(),
+            LightSource::Entities => entities::light_entities(map_entities),
+            LightSource::Rtlights => self.rtlights()?,
+        };
+        for name in &self.lights.exclude {
+            if !lights.iter().any(|l| &l.name == name) {
+                return Err(self.invalid(format!(
+                    "[lights] exclude names `{name}`, which the map's lights do not have"
+                )));
+            }
+        }
+        lights.retain(|l| !self.lights.exclude.contains(&l.name));
+        Ok(lights)
+    }
+
+    /// The lights of `[lights] rtlights`, named `rt0`, `rt1`, …
+    fn rtlights(&self) -> Result<Vec<Light>, SceneFileError> {
+        let file = self.lights.rtlights.as_ref().ok_or_else(|| {
+            self.invalid("[lights] from = \"rtlights\" needs rtlights = \"FILE\"")
+        })?;
+        let path = self.relative(file);
+        let text = std::fs::read_to_string(&path).map_err(|source| SceneFileError::Io {
+            path: path.clone(),
+            source,
+        })?;
+        Ok(rtlights::parse_rtlights(&text)
+            .map_err(|e| SceneFileError::Invalid {
+                path,
+                message: e.to_string(),
+            })?
+            .iter()
+            .enumerate()
+            .map(|(i, l)| l.to_light(&format!("rt{i}")))
+            .collect())
+    }
+
+    /// Adds `[[model]]` number `i`, a player or a single MD3.
+    fn add_model(
+        &self,
+        builder: &mut SceneBuilder,
+        vfs: &Vfs,
+        i: usize,
+        m: &ModelSection,
+    ) -> Result<(), SceneFileError> {
+        if !finite3(m.position) || !m.yaw.is_finite() {
+            return Err(self.invalid(format!("[[model]] {i}: position and yaw must be finite")));
+        }
+        let transform = Mat4::from_translation(Vec3::from_array(m.position))
+            * Mat4::from_rotation_z(m.yaw.to_radians());
+        match (&m.player, &m.md3) {
+            (Some(p), None) => {
+                let frames = m.legs_frame.zip(m.torso_frame);
+                let skin = m.skin.as_deref().unwrap_or("default");
+                model::add_player(builder, vfs, p, skin, frames, transform)?;
+            }
+            (None, Some(path)) => {
+                model::add_md3(builder, vfs, path, m.frame.unwrap_or(0), transform)?;
+            }
+            _ => {
+                return Err(
+                    self.invalid(format!("[[model]] {i}: give exactly one of player or md3"))
+                );
+            }
+        }
+        Ok(())
+    }
+
+    /// The camera at the spawn point `[camera] spawn` names (eye height up, its yaw), else the
+    /// default camera.
+    fn spawn_camera(&self, spawns: &[SpawnPoint]) -> Result<Camera, SceneFileError> {
+        let Some(i) = self.camera.spawn else {
+            return Ok(Camera::default());
+        };
+        let s = spawns.get(i).ok_or_else(|| {
+            self.invalid(format!(
+                "[camera] spawn = {i}, but the map has {} spawn points",
+                spawns.len()
+            ))
+        })?;
+        Ok(Camera {
+            position: s.origin + Vec3::Z * super::camera::Q3_VIEW_HEIGHT,
+            yaw_deg: s.yaw_deg,
+            ..Camera::default()
+        })
     }
 
     fn apply_camera(&self, c: &mut Camera) -> Result<(), SceneFileError> {
@@ -472,6 +476,25 @@ impl SceneFile {
             return Err(self.invalid("[camera] yaw and pitch must be finite"));
         }
         Ok(())
+    }
+}
+
+/// Warns of every light inside solid geometry (outside every BSP cluster) of a Quake 3 world.
+/// Such a light sees the backs of one-sided faces: the rasterized techniques ignore those, the
+/// exact reference does not, so every comparison would be off.
+fn warn_of_lights_in_solid(scene: &Scene, report: &mut LoadReport) {
+    let Some(world) = &scene.world else { return };
+    for l in &scene.lights {
+        if world.cluster_at(l.position) < 0 {
+            let w = format!(
+                "light `{}` at {:?} is inside solid geometry (outside every BSP cluster): \
+                 its shadows will be wrong; move it into the playable space",
+                l.name,
+                l.position.to_array()
+            );
+            log::warn!("{w}");
+            report.warnings.push(w);
+        }
     }
 }
 
