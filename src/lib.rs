@@ -14,6 +14,7 @@ pub mod plan;
 pub mod q3;
 pub mod report;
 pub mod scene;
+pub mod scene_file;
 pub mod shadow;
 pub mod truth;
 pub mod viewer;

@@ -10,8 +10,8 @@ use shadowlab::options::BackendChoice;
 use shadowlab::q3::builder::SceneBuilder;
 use shadowlab::q3::pk3::Vfs;
 use shadowlab::q3::world;
-use shadowlab::scene::file::load_shader_library;
 use shadowlab::scene::{Camera, SurfaceOwner};
+use shadowlab::scene_file::load_shader_library;
 use std::process::Command;
 
 #[test]

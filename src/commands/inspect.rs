@@ -6,7 +6,7 @@ use anyhow::{Context, Result, bail};
 use shadowlab::q3::builder::SceneBuilder;
 use shadowlab::q3::pk3::Vfs;
 use shadowlab::q3::world;
-use shadowlab::scene::file::{SceneFile, load_shader_library};
+use shadowlab::scene_file::{SceneFile, load_shader_library};
 use std::path::PathBuf;
 
 #[derive(clap::Args)]

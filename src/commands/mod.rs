@@ -11,10 +11,10 @@ pub mod view;
 use anyhow::{Context, Result};
 use shadowlab::gl::{GlContext, Renderer, create_context};
 use shadowlab::options::{BackendChoice, OptionValue, Options};
-use shadowlab::scene::file::LoadReport;
-pub use shadowlab::scene::load::Loaded;
-use shadowlab::scene::load::{LoadError, layered_options, load_file};
 use shadowlab::scene::{Scene, builtin};
+use shadowlab::scene_file::LoadReport;
+pub use shadowlab::scene_file::load::Loaded;
+use shadowlab::scene_file::load::{LoadError, layered_options, load_file};
 
 /// Arguments every command accepts.
 #[derive(clap::Args, Clone, Default)]

@@ -33,10 +33,8 @@ pub struct SceneBuilder<'a> {
 
 impl<'a> SceneBuilder<'a> {
     pub fn new(name: &str, shaders: &'a ShaderLibrary) -> SceneBuilder<'a> {
-        let mut scene = Scene::default();
-        scene.name = name.to_string();
         SceneBuilder {
-            scene,
+            scene: Scene::named(name),
             shaders,
             materials: HashMap::new(),
             image_refs: Vec::new(),

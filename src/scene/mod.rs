@@ -7,9 +7,7 @@
 pub mod authored;
 pub mod builtin;
 pub mod camera;
-pub mod file;
 pub mod light;
-pub mod load;
 pub mod path;
 pub mod shapes;
 pub mod vis;
@@ -268,6 +266,14 @@ impl Scene {
                 ([p(tri[0]), p(tri[1]), p(tri[2])], si)
             })
         })
+    }
+
+    /// An empty scene called `name`.
+    pub fn named(name: &str) -> Scene {
+        Scene {
+            name: name.to_string(),
+            ..Scene::default()
+        }
     }
 
     /// The geometry's revision (see the field).

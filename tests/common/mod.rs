@@ -68,19 +68,20 @@ pub fn openarena_data() -> std::path::PathBuf {
 }
 
 /// Loads a scene file from `assets/scenes/` with default options (no progress bar).
-pub fn load_scene_file(name: &str) -> (Scene, shadowlab::scene::file::LoadReport, Options) {
+pub fn load_scene_file(name: &str) -> (Scene, shadowlab::scene_file::LoadReport, Options) {
     openarena_data();
     load_asset(&format!("assets/scenes/{name}.toml"))
 }
 
 /// Loads a scene file by its path under the repository.
-pub fn load_asset(relative: &str) -> (Scene, shadowlab::scene::file::LoadReport, Options) {
+pub fn load_asset(relative: &str) -> (Scene, shadowlab::scene_file::LoadReport, Options) {
     let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join(relative);
-    let loaded = shadowlab::scene::load::load_file_over(test_options(), &path, |mut options| {
-        options.q3.progress = false;
-        Ok::<_, std::convert::Infallible>(options)
-    })
-    .unwrap_or_else(|e| panic!("{e}"));
+    let loaded =
+        shadowlab::scene_file::load::load_file_over(test_options(), &path, |mut options| {
+            options.q3.progress = false;
+            Ok::<_, std::convert::Infallible>(options)
+        })
+        .unwrap_or_else(|e| panic!("{e}"));
     (loaded.scene, loaded.report, loaded.options)
 }
 

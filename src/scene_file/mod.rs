@@ -29,8 +29,8 @@
 //! "shadow_map.size" = 1024
 //! ```
 
-use super::authored::ShapeSection;
-use super::{Camera, Light, LightKind, Scene, builtin};
+pub mod load;
+
 use crate::options::Options;
 use crate::q3::builder::SceneBuilder;
 use crate::q3::entities::{self, Entity, SpawnPoint};
@@ -39,6 +39,8 @@ use crate::q3::pk3::{self, Vfs, VfsError};
 use crate::q3::rtlights;
 use crate::q3::shader::ShaderLibrary;
 use crate::q3::world::{self, MapCounts, MapError};
+use crate::scene::authored::ShapeSection;
+use crate::scene::{Camera, Light, LightKind, Scene, builtin};
 use glam::{Mat4, Vec3};
 use serde::Deserialize;
 use std::path::{Path, PathBuf};
@@ -293,10 +295,7 @@ impl SceneFile {
         let mut scene = match &self.map {
             None => match self.base {
                 Base::Builtin => builtin::default_scene(),
-                Base::Empty => Scene {
-                    name: "empty".to_string(),
-                    ..Scene::default()
-                },
+                Base::Empty => Scene::named("empty"),
             },
             Some(map) => self.build_map(map, options, &mut report)?,
         };
@@ -435,7 +434,7 @@ impl SceneFile {
             ))
         })?;
         Ok(Camera {
-            position: s.origin + Vec3::Z * super::camera::Q3_VIEW_HEIGHT,
+            position: s.origin + Vec3::Z * crate::scene::camera::Q3_VIEW_HEIGHT,
             yaw_deg: s.yaw_deg,
             ..Camera::default()
         })

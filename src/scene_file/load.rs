@@ -2,9 +2,9 @@
 //! the caller's overrides (the command line, a run's settings, a test's), which win. The one
 //! place the commands, `reproduce` and the tests do this.
 
-use super::Scene;
-use super::file::{LoadReport, SceneFile, SceneFileError};
+use super::{LoadReport, SceneFile, SceneFileError};
 use crate::options::{OptionError, Options};
+use crate::scene::Scene;
 use std::path::Path;
 
 /// Where loading failed.
