@@ -22,7 +22,7 @@ use shadowlab::scene::{
     AlphaFunc, Camera, Light, Material, ModelInstance, Scene, SurfaceKind, SurfaceOwner,
 };
 use shadowlab::shadow::volume::{
-    CHUNK_TRIANGLES, CasterGroups, ChunkNode, Counting, shadow_bounds,
+    CHUNK_TRIANGLES, CasterGroups, ChunkNode, Counting, PieceRef, shadow_bounds,
 };
 use std::sync::Arc;
 
@@ -202,9 +202,7 @@ fn light0(plan: &Plan) -> &LightPlan {
 
 /// The bounds of the piece a planned part is extruded from.
 fn piece_bounds(groups: &CasterGroups, part: &VolumePart) -> Aabb {
-    groups.groups[part.group]
-        .piece(part.component, part.chunked)
-        .bounds
+    groups.groups[part.group].piece(part.piece).bounds
 }
 
 /// The centres of the pieces light 0's parts are extruded from.
@@ -295,7 +293,12 @@ fn a_box_outside_the_lights_range_gets_no_part() {
     let o = options(&[]);
     let p = plan(&scene, &far_camera(), &o);
     assert_eq!(part_centres(&scene, &p), vec![Vec3::new(0.0, 0.0, 30.0)]);
-    assert!(light0(&p).volumes.iter().all(|v| v.chunked));
+    assert!(
+        light0(&p)
+            .volumes
+            .iter()
+            .all(|v| matches!(v.piece, PieceRef::Chunk(_)))
+    );
     assert_eq!((p.stats.casters_drawn, p.stats.casters_culled), (1, 2));
 
     let p = plan(
@@ -339,7 +342,7 @@ fn a_box_whose_shadow_misses_every_receiver_gets_no_part() {
 }
 
 /// Guards the paper's frame (`plan.enabled = false`): every component is extruded whole
-/// (`chunked == false`, all triangles), none is culled (the far box and the box above the light
+/// (`PieceRef::Component`, all triangles), none is culled (the far box and the box above the light
 /// included) and each counts depth-fail as `shadow_volume.counting = zfail` says. The planner's
 /// frame on the same scene keeps one chunk.
 #[test]
@@ -361,11 +364,18 @@ fn the_papers_frame_extrudes_whole_components() {
 
     let p = plan(&scene, &far_camera(), &options(&["plan.enabled=false"]));
     let lp = light0(&p);
-    let mut components: Vec<usize> = lp.volumes.iter().map(|v| v.component).collect();
+    let mut components: Vec<usize> = lp
+        .volumes
+        .iter()
+        .map(|v| match v.piece {
+            PieceRef::Component(i) => i,
+            PieceRef::Chunk(_) => panic!("{v:?} is a chunk"),
+        })
+        .collect();
     components.sort_unstable();
     assert_eq!(components, vec![0, 1, 2]);
     for v in &lp.volumes {
-        assert!(!v.chunked, "{v:?}");
+        assert!(matches!(v.piece, PieceRef::Component(_)), "{v:?}");
         assert_eq!(
             (v.counting, v.triangles),
             (Counting::ZFail, PartTriangles::All)
@@ -377,7 +387,7 @@ fn the_papers_frame_extrudes_whole_components() {
 
     let p = plan(&scene, &far_camera(), &options(&[]));
     assert_eq!(light0(&p).volumes.len(), 1);
-    assert!(light0(&p).volumes[0].chunked);
+    assert!(matches!(light0(&p).volumes[0].piece, PieceRef::Chunk(_)));
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -447,7 +457,7 @@ fn split_counting_splits_off_the_triangles_over_the_near_plane() {
             (Counting::ZPass, PartTriangles::Rest(0)),
         ]
     );
-    assert_eq!(lp.volumes[0].component, lp.volumes[1].component);
+    assert_eq!(lp.volumes[0].piece, lp.volumes[1].piece);
     assert_eq!(lp.near_plane_triangles.len(), 1);
     let near = &lp.near_plane_triangles[0];
     assert_eq!(near.len(), 2, "{near:?}");
@@ -712,7 +722,10 @@ fn chunks_counted_differently_are_not_merged() {
     let mut by_chunk: Vec<(usize, Counting)> = light0(&p)
         .volumes
         .iter()
-        .map(|v| (v.component, v.counting))
+        .map(|v| match v.piece {
+            PieceRef::Chunk(i) => (i, v.counting),
+            PieceRef::Component(_) => panic!("{v:?} is not a chunk"),
+        })
         .collect();
     by_chunk.sort_by_key(|v| v.0);
     assert_eq!(by_chunk, vec![(0, Counting::ZFail), (1, Counting::ZPass)]);
