@@ -49,10 +49,8 @@ pub struct CacheStats {
 
 #[derive(Debug, Clone)]
 pub struct Frame {
-    pub width: u32,
-    pub height: u32,
-    /// RGBA8, top row first.
-    pub rgba: Vec<u8>,
+    /// The frame's colour buffer, top row first.
+    pub image: Rgba,
     /// World to clip space of the camera that rendered the frame.
     pub view_proj: Mat4,
     pub passes: Vec<PassTime>,
@@ -78,14 +76,16 @@ pub struct Frame {
 }
 
 impl Frame {
+    pub fn width(&self) -> u32 {
+        self.image.width
+    }
+
+    pub fn height(&self) -> u32 {
+        self.image.height
+    }
+
     pub fn pixel(&self, x: u32, y: u32) -> [u8; 4] {
-        let i = ((y * self.width + x) * 4) as usize;
-        [
-            self.rgba[i],
-            self.rgba[i + 1],
-            self.rgba[i + 2],
-            self.rgba[i + 3],
-        ]
+        self.image.pixel(x, y)
     }
 
     /// Rec. 709 luma of a pixel, 0..=255.
@@ -102,22 +102,16 @@ impl Frame {
             return None;
         }
         let ndc = c.truncate() / c.w;
-        let x = (ndc.x * 0.5 + 0.5) * self.width as f32;
-        let y = (0.5 - ndc.y * 0.5) * self.height as f32;
-        if x < 0.0 || y < 0.0 || x >= self.width as f32 || y >= self.height as f32 {
+        let x = (ndc.x * 0.5 + 0.5) * self.width() as f32;
+        let y = (0.5 - ndc.y * 0.5) * self.height() as f32;
+        if x < 0.0 || y < 0.0 || x >= self.width() as f32 || y >= self.height() as f32 {
             return None;
         }
         Some((x as u32, y as u32))
     }
 
     pub fn save_png(&self, path: &Path) -> Result<(), image::ImageError> {
-        image::save_buffer(
-            path,
-            &self.rgba,
-            self.width,
-            self.height,
-            image::ExtendedColorType::Rgba8,
-        )
+        self.image.save(path)
     }
 
     /// Milliseconds of the pass, if it ran.

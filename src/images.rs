@@ -36,6 +36,17 @@ impl Rgba {
         ]
     }
 
+    /// The pixel at column `x`, row `y` from the top.
+    pub fn pixel(&self, x: u32, y: u32) -> [u8; 4] {
+        let i = ((y * self.width + x) * 4) as usize;
+        [
+            self.data[i],
+            self.data[i + 1],
+            self.data[i + 2],
+            self.data[i + 3],
+        ]
+    }
+
     pub fn save(&self, path: &Path) -> Result<(), image::ImageError> {
         image::save_buffer(
             path,

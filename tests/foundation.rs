@@ -15,7 +15,7 @@ fn floor_under_the_spot_light_is_brighter_than_outside_its_cone() {
     // Only the spot light, so the omni light cannot brighten the comparison point.
     options.set("lighting.only", "0").unwrap();
     let frame = render(&scene, &options);
-    assert_eq!((frame.width, frame.height), (640, 480));
+    assert_eq!((frame.width(), frame.height()), (640, 480));
     // The spot aims at SPOT_TARGET on the floor; (150, -200) on the floor is > 38° off its axis.
     let axis = (SPOT_TARGET - SPOT_POSITION).normalize();
     let outside = Vec3::new(180.0, -200.0, 0.0);

@@ -435,7 +435,9 @@ fn case08_thin_and_alpha_tested_casters() {
     let solid = Reference::build_with(&m.scene, false);
     let g = sv_run.frame.gbuffer.as_ref().unwrap();
     let geometric = truth::reference_mask(&solid, g, &m.scene.lights[0], 0, Tracing::Bvh);
-    let exact = m.exact(sv_run.frame.width, sv_run.frame.height, 0).clone();
+    let exact = m
+        .exact(sv_run.frame.width(), sv_run.frame.height(), 0)
+        .clone();
     let not_alpha = |i: usize| exact.values[i] == geometric.values[i];
     let outside_alpha = truth::compare_where(sv_run.mask(0), &exact, not_alpha).rates();
     println!(

@@ -58,12 +58,13 @@ fn every_map_in_the_data_set_loads_and_renders_a_frame() {
         flat.set("lighting.ambient", "1").unwrap();
         let frame = renderer.render(&scene, &flat).unwrap();
         let drawn = frame
-            .rgba
+            .image
+            .data
             .chunks_exact(4)
             .filter(|p| p[0] | p[1] | p[2] > 0)
             .count();
         assert!(
-            drawn * 20 > (frame.width * frame.height) as usize,
+            drawn * 20 > (frame.width() * frame.height()) as usize,
             "{map}: only {drawn} drawn pixels from the first spawn point"
         );
     }

@@ -32,7 +32,7 @@ fn alpha_only_pixels(m: &Measurer, frame: &shadowlab::frame::Frame, light: usize
     let solid = Reference::build_with(&m.scene, false);
     let g = frame.gbuffer.as_ref().unwrap();
     let geometric = truth::reference_mask(&solid, g, &m.scene.lights[light], light, Tracing::Bvh);
-    let exact = m.exact(frame.width, frame.height, light);
+    let exact = m.exact(frame.width(), frame.height(), light);
     exact
         .values
         .iter()
@@ -54,7 +54,7 @@ fn zfail_and_auto_are_exact_away_from_edges_on_the_builtin_scene_and_oa_dm1() {
             let mut alpha = truth::Counts::default();
             for mask in &r.frame.masks {
                 let alpha_only = alpha_only_pixels(&m, &r.frame, mask.light);
-                let exact = m.exact(r.frame.width, r.frame.height, mask.light);
+                let exact = m.exact(r.frame.width(), r.frame.height(), mask.light);
                 geometric.add(&truth::compare_where(mask, exact, |i| !alpha_only[i]));
                 alpha.add(&truth::compare_where(mask, exact, |i| alpha_only[i]));
             }
@@ -327,7 +327,7 @@ fn projections_offsets_and_shading_variants_agree() {
     // The fill quad shades differently but decides by the same stencil.
     let fill = m.measure(&options_with(&[SV, "shadow_volume.shading=fill"]));
     assert!(same(&fill));
-    assert_ne!(fill.frame.rgba, base.frame.rgba);
+    assert_ne!(fill.frame.image.data, base.frame.image.data);
     // Forsyth's epsilon makes slightly back-facing triangles cast: the terminator moves.
     let eps = m.measure(&options_with(&[SV, "shadow_volume.facing_epsilon=0.2"]));
     assert!(!same(&eps));
@@ -391,7 +391,7 @@ fn the_alpha_tested_grate_is_beyond_geometric_volumes() {
     let mut m = Measurer::new(builtin::default_scene(), &options_with(&[SV]));
     let r = m.measure(&options_with(&[SV, "lighting.only=0"]));
     let alpha_only = alpha_only_pixels(&m, &r.frame, 0);
-    let exact = m.exact(r.frame.width, r.frame.height, 0);
+    let exact = m.exact(r.frame.width(), r.frame.height(), 0);
     let on_alpha = truth::compare_where(r.mask(0), exact, |i| alpha_only[i]);
     assert!(on_alpha.false_shadow > 500);
     assert_eq!(on_alpha.false_lit, 0);

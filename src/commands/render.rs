@@ -233,8 +233,8 @@ pub fn run(common: &CommonArgs, args: &Args) -> Result<()> {
     eprintln!(
         "wrote {} ({}x{}, {} path, scene {} loaded in {:.0} ms, frame {:.1} ms: {})",
         args.out.display(),
-        frame.width,
-        frame.height,
+        frame.width(),
+        frame.height(),
         ctx.backend,
         scene.name,
         report.load_ms,

@@ -720,9 +720,11 @@ impl<'a> FrameRun<'a> {
         let (gbuffer, masks) = self.measure(&maps);
         let plan = self.ctx.plan;
         Ok(Frame {
-            width: self.target.width,
-            height: self.target.height,
-            rgba,
+            image: Rgba {
+                width: self.target.width,
+                height: self.target.height,
+                data: rgba,
+            },
             view_proj: plan.camera.view_proj,
             passes,
             frame_ms,
@@ -779,9 +781,7 @@ impl<'a> FrameRun<'a> {
         unsafe { gl.finish() };
         let plan = self.ctx.plan;
         Frame {
-            width: self.target.width,
-            height: self.target.height,
-            rgba: self.target.read_rgba(gl),
+            image: self.color_image(),
             view_proj: plan.camera.view_proj,
             passes,
             frame_ms: self.start.elapsed().as_secs_f64() * 1e3,

@@ -34,7 +34,7 @@ impl ErrorJob {
         let total = frame.masks.len() + 1;
         let gbuffer = frame.gbuffer.clone();
         let masks = frame.masks.clone();
-        let (width, height) = (frame.width, frame.height);
+        let (width, height) = (frame.width(), frame.height());
         let progress = done.clone();
         let handle = std::thread::spawn(move || {
             let gbuffer = gbuffer?;

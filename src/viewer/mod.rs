@@ -187,11 +187,7 @@ impl App {
         // Textures for the view.
         let ctx = r.egui.egui_ctx.clone();
         if let Some(f) = &r.frame {
-            let view = f.step_image.clone().unwrap_or_else(|| Rgba {
-                width: f.width,
-                height: f.height,
-                data: f.rgba.clone(),
-            });
+            let view = f.step_image.clone().unwrap_or_else(|| f.image.clone());
             show(&ctx, &mut r.textures.view, "view", &view);
         }
         let light = state.selected_light;
@@ -266,12 +262,7 @@ impl App {
                 }
                 Pending::Frame(path) => {
                     if let Some(f) = &r.frame {
-                        let img = Rgba {
-                            width: f.width,
-                            height: f.height,
-                            data: f.rgba.clone(),
-                        };
-                        save(&img, &path)?;
+                        save(&f.image, &path)?;
                     }
                 }
             }

@@ -29,10 +29,15 @@ pub fn render_on(backend: BackendChoice, scene: &Scene, options: &Options) -> Fr
 
 /// Largest per-channel difference and the number of pixels that differ at all.
 pub fn image_difference(a: &Frame, b: &Frame) -> (u8, usize) {
-    assert_eq!((a.width, a.height), (b.width, b.height));
+    assert_eq!((a.width(), a.height()), (b.width(), b.height()));
     let mut max = 0u8;
     let mut differing = 0;
-    for (pa, pb) in a.rgba.chunks_exact(4).zip(b.rgba.chunks_exact(4)) {
+    for (pa, pb) in a
+        .image
+        .data
+        .chunks_exact(4)
+        .zip(b.image.data.chunks_exact(4))
+    {
         let d = pa
             .iter()
             .zip(pb)
@@ -49,8 +54,8 @@ pub fn image_difference(a: &Frame, b: &Frame) -> (u8, usize) {
 pub fn mean_luma(f: &Frame, (x, y): (u32, u32), radius: u32) -> f32 {
     let mut sum = 0.0;
     let mut n = 0.0;
-    for yy in y.saturating_sub(radius)..(y + radius + 1).min(f.height) {
-        for xx in x.saturating_sub(radius)..(x + radius + 1).min(f.width) {
+    for yy in y.saturating_sub(radius)..(y + radius + 1).min(f.height()) {
+        for xx in x.saturating_sub(radius)..(x + radius + 1).min(f.width()) {
             sum += f.luma(xx, yy);
             n += 1.0;
         }

@@ -123,11 +123,7 @@ impl<'a> Lab<'a> {
 
     /// The frame of a capture as an image.
     pub fn frame_image(capture: &Capture) -> Rgba {
-        Rgba {
-            width: capture.frame.width,
-            height: capture.frame.height,
-            data: capture.frame.rgba.clone(),
-        }
+        capture.frame.image.clone()
     }
 
     /// Every light's errors of a capture in one image (red false shadow, blue false lit).
@@ -135,8 +131,8 @@ impl<'a> Lab<'a> {
         let rendered: Vec<&crate::images::Mask> = capture.frame.masks.iter().collect();
         let exact: Vec<&crate::images::Mask> = capture.exact.iter().collect();
         Rgba {
-            width: capture.frame.width,
-            height: capture.frame.height,
+            width: capture.frame.width(),
+            height: capture.frame.height(),
             data: truth::error_image_all(&rendered, &exact),
         }
     }
