@@ -440,9 +440,14 @@ mod tests {
     use crate::viewer::script;
 
     fn state(script_text: &str) -> ViewerState {
+        // Unshadowed at first, so that the script's `set technique` is seen to act.
+        let options = Options {
+            technique: Technique::None,
+            ..Options::default()
+        };
         ViewerState::new(
             builtin::default_scene(),
-            Options::default(),
+            options,
             script::parse(script_text).unwrap(),
         )
     }
