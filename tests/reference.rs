@@ -197,6 +197,8 @@ fn bench_json_holds_every_field_for_a_two_configuration_sweep() {
             "1",
             "--frames",
             "3",
+            "--set",
+            "technique=none",
             "--sweep",
             "lighting.only=0,1",
             "--json",

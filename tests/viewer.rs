@@ -79,14 +79,15 @@ fn the_viewer_drives_the_builtin_scene_and_oa_dm1_from_scripts() {
     view(
         None,
         &format!(
-            "wait 2\nframe {}\nscreenshot {}\nset technique=shadow_volume\nwait 2\nframe {}\n\
-             overlay timings on\nwait 3\nscreenshot {}\nwalkthrough 3\nwait 3\nscreenshot {}\n\
+            "wait 2\nscreenshot {}\nset technique=none\nwait 2\nframe {}\n\
+             set technique=shadow_volume\nwait 2\nframe {}\noverlay timings on\nwait 3\n\
+             screenshot {}\nwalkthrough 3\nwait 3\nscreenshot {}\n\
              walkthrough off\nview stencil\nwait 2\nscreenshot {}\nview scene\n\
              set technique=shadow_map\nwait 2\nframe {}\noverlay texels on\nwait 2\nframe {}\n\
              overlay texels off\nlight 1 shadow_volume\nwait 2\nframe {}\nview depth\nwait 2\n\
              screenshot {}\nquit\n",
-            p("builtin-frame-none.png"),
             p("viewer-builtin.png"),
+            p("builtin-frame-none.png"),
             p("builtin-frame-volumes.png"),
             p("viewer-timings.png"),
             p("viewer-walkthrough.png"),

@@ -975,7 +975,10 @@ impl<'a> FrameRun<'a> {
             let v = self
                 .planner
                 .volume_draws(self.ctx.scene, plan, lp, self.ctx.options)?;
-            self.volume_buffers.upload(gl, v).map_err(RenderError::Gl)?;
+            if let Err(e) = self.volume_buffers.upload(gl, v) {
+                self.planner.forget_volume_draws(lp.light);
+                return Err(RenderError::Gl(e));
+            }
             let build_ms = if v.stats.rebuilt {
                 v.stats.build_ms
             } else {

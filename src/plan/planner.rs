@@ -198,6 +198,12 @@ impl Planner {
             .prepare(scene, &groups, lp, &options.shadow_volume, choices)
     }
 
+    /// Forgets the light's volume draws (their upload failed): the next frame makes them
+    /// afresh.
+    pub fn forget_volume_draws(&mut self, light: usize) {
+        self.volumes.forget_light(light);
+    }
+
     /// The light's volume draws as last prepared.
     pub fn last_volume_draws(&self, light: usize) -> Option<&LightVolumeDraws> {
         self.volumes.get(light)

@@ -524,6 +524,12 @@ impl VolumePlanner {
         self.fits.clear();
     }
 
+    /// Forgets the light's draws: what the GL layer holds for it may not match them (an
+    /// upload failed), so the next frame builds and uploads them afresh.
+    pub fn forget_light(&mut self, light: usize) {
+        self.lights.remove(&light);
+    }
+
     /// The light's volume draws as last prepared.
     pub fn get(&self, light: usize) -> Option<&LightVolumeDraws> {
         self.lights.get(&light)
@@ -546,8 +552,29 @@ impl VolumePlanner {
         lv.light = lp.light;
         if inputs.is_some() && lv.inputs == inputs {
             lv.keep_last_draws();
-            return Ok(lv);
+            return Ok(&self.lights[&lp.light]);
         }
+        match self.prepare_again(scene, groups, lp, o, choices, inputs) {
+            Ok(()) => Ok(&self.lights[&lp.light]),
+            Err(e) => {
+                // Nothing of this frame's layout is kept: the next frame lays out afresh.
+                self.lights.remove(&lp.light);
+                Err(e)
+            }
+        }
+    }
+
+    /// [`VolumePlanner::prepare`] when the light's draws cannot be kept as they were.
+    fn prepare_again(
+        &mut self,
+        scene: &Scene,
+        groups: &CasterGroups,
+        lp: &LightPlan,
+        o: &ShadowVolumeOptions,
+        choices: PieceChoices,
+        inputs: Option<DrawInputs>,
+    ) -> Result<(), VolumeDrawError> {
+        let lv = self.lights.entry(lp.light).or_default();
         let start = Instant::now();
         let camera = choices.camera;
         let receivers = visible_receivers(lp, &choices);
@@ -581,6 +608,8 @@ impl VolumePlanner {
             &mut stats,
         );
         stats.rebuilt = stats.parts_built > 0;
+        let draws = draws_of(&layout.parts);
+        check_bounds(lp.light, &draws, &layout.indices, layout.vertex_count)?;
         lv.upload = VolumeUpload {
             vertices: (layout.hash != lv.layout || stats.rebuilt).then(|| lv.vertices(&layout)),
             indices: (!layout.indices.is_empty()).then(|| layout.indices.clone()),
@@ -588,13 +617,12 @@ impl VolumePlanner {
         lv.layout = layout.hash;
         lv.vertex_count = layout.vertex_count;
         stats.build_ms = start.elapsed().as_secs_f64() * 1e3;
-        lv.draws = draws_of(&layout.parts);
-        check_bounds(lp.light, &lv.draws, &layout.indices, layout.vertex_count)?;
+        lv.draws = draws;
         lv.indices = layout.indices;
         lv.parts = layout.parts;
         lv.inputs = inputs;
         lv.stats = stats;
-        Ok(lv)
+        Ok(())
     }
 }
 
