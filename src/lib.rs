@@ -11,6 +11,7 @@ pub mod gl;
 pub mod images;
 pub mod options;
 pub mod plan;
+pub mod presets;
 pub mod q3;
 pub mod report;
 pub mod scene;

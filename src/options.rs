@@ -4,7 +4,7 @@
 //! what the paper (Arneson, "Real-Time Shadows") or the thesis (Sindholt 2005) chose; two
 //! defaults are not the paper's, so that a plain run shows shadows and runs fast: `technique =
 //! auto` (the paper names one) and the frame planner (`plan.enabled`; the paper plans nothing).
-//! `--set plan.enabled=false` with a named technique is the paper's frame. The same keys are set
+//! `--preset paper` (see `presets`) is the paper's frame. The same keys are set
 //! from the command line (`--set key=value`), from scene files (`[options]`), by bench sweeps and by the
 //! viewer's panels; `shadowlab options` lists them.
 //!
@@ -557,7 +557,7 @@ define_options! {
     root {
         /// Shadow technique for every light. The default, `auto`, shadows every light with
         /// the technique the planner picks for it (see `accuracy`); the paper's frame names one
-        /// (`shadow_map` or `shadow_volume`) with `plan.enabled = false`.
+        /// (`shadow_map` or `shadow_volume`) with `plan.enabled = false` (`--preset paper`).
         technique: Technique = Technique::Auto;
         /// Frame width in pixels (the paper renders 640x480).
         width: u32 = 640, in 16 ..= 16384;

@@ -11,6 +11,7 @@ pub mod view;
 use anyhow::{Context, Result};
 use shadowlab::gl::{GlContext, Renderer, create_context};
 use shadowlab::options::{BackendChoice, OptionValue, Options};
+use shadowlab::presets::Preset;
 use shadowlab::scene::{Scene, builtin};
 use shadowlab::scene_file::LoadReport;
 pub use shadowlab::scene_file::load::Loaded;
@@ -22,6 +23,10 @@ pub struct CommonArgs {
     /// GL context path: auto (egl, then osmesa), egl, osmesa or window.
     #[arg(long, global = true, value_name = "auto|egl|osmesa|window")]
     pub backend: Option<String>,
+    /// A named set of option values, applied before `--set`: `paper` (the paper's frame and
+    /// choices) or `default`; `shadowlab options` lists their values.
+    #[arg(long, global = true, value_name = "paper|default")]
+    pub preset: Option<String>,
     /// Set an option (repeatable); `shadowlab options` lists the keys.
     #[arg(long = "set", global = true, value_name = "KEY=VALUE")]
     pub sets: Vec<String>,
@@ -67,6 +72,9 @@ impl CommonArgs {
     }
 
     fn apply(&self, mut o: Options) -> Result<Options> {
+        if let Some(name) = &self.preset {
+            Preset::parse(name)?.apply(&mut o).context("in --preset")?;
+        }
         for s in &self.sets {
             o.set_assignment(s).context("in --set")?;
         }

@@ -2,6 +2,7 @@
 
 use anyhow::Result;
 use shadowlab::options::Options;
+use shadowlab::presets::Preset;
 
 #[derive(clap::Args)]
 pub struct Args {
@@ -13,7 +14,18 @@ pub struct Args {
 pub fn run(args: &Args) -> Result<()> {
     let specs = Options::specs();
     if args.json {
-        println!("{}", serde_json::to_string_pretty(&specs)?);
+        let presets: Vec<serde_json::Value> = Preset::ALL
+            .into_iter()
+            .map(|p| {
+                serde_json::json!({
+                    "name": p.name(),
+                    "meaning": p.meaning(),
+                    "values": p.values().iter().map(|(k, v)| (k.to_string(), v.to_string())).collect::<std::collections::BTreeMap<_, _>>(),
+                })
+            })
+            .collect();
+        let out = serde_json::json!({ "options": specs, "presets": presets });
+        println!("{}", serde_json::to_string_pretty(&out)?);
         return Ok(());
     }
     let kw = specs.iter().map(|s| s.key.len()).max().unwrap_or(3);
@@ -30,6 +42,13 @@ pub fn run(args: &Args) -> Result<()> {
             "{:kw$}  {:tw$}  {:dw$}  {}",
             s.key, s.type_name, s.default, s.meaning
         );
+    }
+    println!("\npresets (`--preset NAME`, applied before `--set`):");
+    for p in Preset::ALL {
+        println!("  {}: {}", p.name(), p.meaning());
+        for (k, v) in p.values() {
+            println!("      {k} = {v}");
+        }
     }
     Ok(())
 }

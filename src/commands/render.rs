@@ -6,6 +6,7 @@ use glam::Vec3;
 use shadowlab::frame::Frame;
 use shadowlab::gl::FrameRequest;
 use shadowlab::options::Technique;
+use shadowlab::presets::Preset;
 use shadowlab::scene::Scene;
 use shadowlab::truth::{self, Reference, reference};
 use std::path::{Path, PathBuf};
@@ -205,6 +206,8 @@ pub fn run(common: &CommonArgs, args: &Args) -> Result<()> {
         println!(
             "{}",
             serde_json::to_string_pretty(&serde_json::json!({
+                "preset": Preset::matching(&options),
+                "differs_from_paper": Preset::Paper.differences(&options),
                 "plan": frame.plan_stats,
                 "cache": frame.cache,
                 "volumes": volumes,

@@ -14,6 +14,7 @@ use crate::images::Mask;
 use crate::options::{OptionError, Options, Technique};
 use crate::plan::PlanStats;
 use crate::plan::volume_draws::VolumeStats;
+use crate::presets::{Difference, Preset};
 use crate::scene::Scene;
 use crate::scene::path::PathKey;
 use crate::truth::{Counts, ExactMasks};
@@ -170,6 +171,11 @@ pub struct BenchRow {
     pub label: String,
     pub swept: BTreeMap<String, String>,
     pub options: Options,
+    /// The preset the options equal (`paper`, `default`), if any.
+    pub preset: Option<Preset>,
+    /// The options that differ from the paper's frame (`--preset paper`), with the paper's
+    /// values.
+    pub differs_from_paper: Vec<Difference>,
     pub width: u32,
     pub height: u32,
     pub lights: usize,
@@ -494,6 +500,8 @@ impl<'a> Bench<'a> {
                 label: c.label(),
                 swept: c.swept.clone(),
                 options: c.options.clone(),
+                preset: Preset::matching(&c.options),
+                differs_from_paper: Preset::Paper.differences(&c.options),
                 width: c.options.width,
                 height: c.options.height,
                 lights: per_light.len(),

@@ -443,6 +443,25 @@ fn stages(frame: &Frame) -> Vec<(String, f64)> {
     out
 }
 
+/// Which preset the options equal, or how they differ from the paper's frame.
+fn paper_line(options: &crate::options::Options) -> String {
+    use crate::presets::Preset;
+    if let Some(p) = Preset::matching(options) {
+        return format!("preset {}", p.name());
+    }
+    let keys: Vec<String> = Preset::Paper
+        .differences(options)
+        .into_iter()
+        .map(|d| d.key)
+        .collect();
+    let shown = keys.iter().take(4).cloned().collect::<Vec<_>>().join(", ");
+    let more = keys.len().saturating_sub(4);
+    match more {
+        0 => format!("differs from the paper's frame in {shown}"),
+        _ => format!("differs from the paper's frame in {shown} and {more} more"),
+    }
+}
+
 fn timings(ui: &mut egui::Ui, state: &ViewerState, frame: &Frame) {
     let stages = stages(frame);
     let max = stages.iter().map(|s| s.1).fold(0.1, f64::max);
@@ -486,6 +505,7 @@ fn timings(ui: &mut egui::Ui, state: &ViewerState, frame: &Frame) {
         "lights drawn {lights_on} of {}",
         state.scene.lights.len()
     ));
+    ui.label(paper_line(&state.options));
     ui.label(format!(
         "planner: {} lights planned, {} culled (frustum {}, PVS {}), {} without casters",
         p.lights_planned,

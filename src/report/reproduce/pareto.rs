@@ -185,6 +185,8 @@ mod tests {
             label: format!("{technique} {ms} {error}"),
             swept: BTreeMap::new(),
             options: Options::default(),
+            preset: None,
+            differs_from_paper: Vec::new(),
             width: 1,
             height: 1,
             lights: 1,
