@@ -1,11 +1,35 @@
 //! What each step of a frame does and which GL state it uses, in words, for the viewer's
-//! walkthrough mode. The wording follows the options in force, so a toggle changes the text.
+//! walkthrough mode. The wording follows the options in force and what the frame actually
+//! executed (the planner's stencil passes and counting), so a toggle changes the text.
 
-use crate::frame::{Step, StepKind};
+use crate::frame::{Frame, Step, StepKind};
 use crate::options::{
-    CasterFaces, CompareResult, CountingMode, DepthSource, Options, StencilPasses, StencilWrap,
+    CasterFaces, CompareResult, CountingMode, DepthSource, Options, StencilWrap, VolumeProjection,
     VolumeShading,
 };
+
+/// What a frame executed, as far as the explanations need it.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Executed {
+    /// Stencil passes per light's volumes: 2 (culled passes) or 1 (glStencilOpSeparate).
+    pub stencil_passes: usize,
+    /// The step's light's volume parts counted (depth-fail, depth-pass), when it has volumes.
+    pub parts: Option<(usize, usize)>,
+}
+
+impl Executed {
+    /// What `frame` executed for `step`.
+    pub fn of(frame: &Frame, step: &Step) -> Executed {
+        Executed {
+            stencil_passes: frame.plan_stats.stencil_passes,
+            parts: frame
+                .volumes
+                .iter()
+                .find(|v| Some(v.light) == step.light)
+                .map(|v| (v.zfail_parts, v.zpass_parts)),
+        }
+    }
+}
 
 /// A step explained: a title, what it does, and the GL calls behind it.
 #[derive(Debug, Clone, PartialEq)]
@@ -23,8 +47,26 @@ fn light_name(step: &Step) -> String {
     }
 }
 
-/// Explains `step` under `options`.
-pub fn explain(step: &Step, options: &Options) -> Explanation {
+/// How the light's volumes were counted: the parts the frame drew, or the option when the
+/// frame has none to show.
+fn counting_text(mode: CountingMode, parts: Option<(usize, usize)>) -> String {
+    const ZFAIL: &str = "depth-fail: faces behind the surface are counted";
+    const ZPASS: &str = "depth-pass: faces in front of the surface are counted";
+    match (parts, mode) {
+        (Some((zfail, 0)), _) if zfail > 0 => ZFAIL.into(),
+        (Some((0, zpass)), _) if zpass > 0 => ZPASS.into(),
+        (Some((zfail, zpass)), _) if zfail > 0 => format!(
+            "{zfail} parts depth-fail, {zpass} depth-pass (the planner's choice per piece: \
+             depth-pass where the view cannot start inside the piece's shadow)"
+        ),
+        (_, CountingMode::Zfail) => ZFAIL.into(),
+        (_, CountingMode::Zpass) => ZPASS.into(),
+        (_, CountingMode::Auto) => "each caster depth-pass where safe, else depth-fail".into(),
+    }
+}
+
+/// Explains `step` under `options`, as `executed`.
+pub fn explain(step: &Step, options: &Options, executed: Executed) -> Explanation {
     let sm = &options.shadow_map;
     let sv = &options.shadow_volume;
     let who = light_name(step);
@@ -87,25 +129,28 @@ pub fn explain(step: &Step, options: &Options) -> Explanation {
                 "The light's shadow volumes are drawn without colour or depth writes; each \
                  pixel's stencil ends up counting the volumes it lies in ({}). Non-zero means \
                  shadowed.",
-                match sv.counting {
-                    CountingMode::Zfail => "depth-fail: faces behind the surface are counted",
-                    CountingMode::Zpass => "depth-pass: faces in front of the surface are counted",
-                    CountingMode::Auto => "each caster depth-pass where safe, else depth-fail",
-                }
+                counting_text(sv.counting, executed.parts)
             ),
             gl_state: format!(
                 "glClear(GL_STENCIL_BUFFER_BIT); glColorMask(0,0,0,0); glDepthMask(0); \
-                 glStencilFunc(GL_ALWAYS, 0, ~0); {}; {} arithmetic; infinite far plane.",
-                match sv.stencil {
-                    StencilPasses::TwoPass =>
-                        "two passes with glCullFace: back faces GL_INCR on depth fail, then \
-                         front faces GL_DECR",
-                    StencilPasses::Separate =>
-                        "one pass with glStencilOpSeparate for front and back faces",
+                 glStencilFunc(GL_ALWAYS, 0, ~0); {}; {} arithmetic; {}.",
+                if executed.stencil_passes == 2 {
+                    "two passes with glCullFace: back faces GL_INCR on depth fail, then front \
+                     faces GL_DECR"
+                } else {
+                    "one pass with glStencilOpSeparate for front and back faces"
                 },
-                match (sv.wrap, sv.stencil) {
-                    (StencilWrap::Saturate, StencilPasses::TwoPass) => "saturating",
-                    _ => "wrapping",
+                // One pass always wraps (see the stencil pass).
+                if sv.wrap == StencilWrap::Saturate && executed.stencil_passes == 2 {
+                    "saturating"
+                } else {
+                    "wrapping"
+                },
+                match sv.projection {
+                    VolumeProjection::Infinite => "infinite far plane",
+                    VolumeProjection::InfiniteEpsilon =>
+                        "infinite far plane with Lengyel's epsilon",
+                    VolumeProjection::DepthClamp => "finite far plane with depth clamping",
                 }
             ),
         },
@@ -161,6 +206,11 @@ pub fn explain(step: &Step, options: &Options) -> Explanation {
 mod tests {
     use super::*;
 
+    const PAPER: Executed = Executed {
+        stencil_passes: 2,
+        parts: None,
+    };
+
     #[test]
     fn explanations_follow_the_options() {
         let step = Step {
@@ -170,19 +220,48 @@ mod tests {
             technique: None,
         };
         let mut o = Options::default();
-        let a = explain(&step, &o);
+        let a = explain(&step, &o, PAPER);
         assert!(a.title.contains("light 1, view 2"));
         assert!(a.gl_state.contains("frame's own depth buffer"));
         o.shadow_map.depth_source = DepthSource::Fbo;
-        assert!(explain(&step, &o).gl_state.contains("FBO"));
+        assert!(explain(&step, &o, PAPER).gl_state.contains("FBO"));
         let stencil = Step {
             kind: StepKind::Stencil,
             light: Some(0),
             face: None,
             technique: None,
         };
-        assert!(explain(&stencil, &o).what.contains("depth-fail"));
+        assert!(explain(&stencil, &o, PAPER).what.contains("depth-fail"));
         o.shadow_volume.counting = CountingMode::Zpass;
-        assert!(explain(&stencil, &o).what.contains("depth-pass"));
+        assert!(explain(&stencil, &o, PAPER).what.contains("depth-pass"));
+    }
+
+    #[test]
+    fn the_stencil_step_says_what_the_planner_ran() {
+        let stencil = Step {
+            kind: StepKind::Stencil,
+            light: Some(0),
+            face: None,
+            technique: None,
+        };
+        // The options ask for two saturating depth-fail passes; the planner ran one wrapping
+        // pass with both countings.
+        let o = Options::default();
+        let paper = explain(&stencil, &o, PAPER);
+        assert!(paper.gl_state.contains("two passes") && paper.gl_state.contains("saturating"));
+        let planned = explain(
+            &stencil,
+            &o,
+            Executed {
+                stencil_passes: 1,
+                parts: Some((3, 5)),
+            },
+        );
+        assert!(planned.gl_state.contains("one pass") && planned.gl_state.contains("wrapping"));
+        assert!(
+            planned.what.contains("3 parts depth-fail, 5 depth-pass"),
+            "{}",
+            planned.what
+        );
     }
 }

@@ -666,9 +666,10 @@ pub fn draw(
             .show(&ctx, |ui| timings(ui, state, f));
     }
     if let Some(k) = state.walkthrough
-        && let Some(step) = frame.and_then(|f| f.steps.get(k))
+        && let Some(f) = frame
+        && let Some(step) = f.steps.get(k)
     {
-        let e = walkthrough::explain(step, &state.options);
+        let e = walkthrough::explain(step, &state.options, walkthrough::Executed::of(f, step));
         egui::Window::new("walkthrough")
             .default_pos(Pos2::new(360.0, ctx.content_rect().bottom() - 220.0))
             .default_width(520.0)
