@@ -73,6 +73,8 @@ pub struct Frame {
     pub plan_stats: crate::plan::PlanStats,
     /// Shadow maps and volume parts drawn afresh or reused.
     pub cache: CacheStats,
+    /// Options replaced because the GL lacks (or `gl.disable` hides) a feature they need.
+    pub fallbacks: Vec<crate::plan::fallback::Fallback>,
 }
 
 impl Frame {

@@ -779,6 +779,15 @@ define_options! {
         caching: bool = true;
     }
 
+    /// The GL the frame runs on.
+    group gl: GlOptions {
+        /// Features the capability probe reports missing although the GL has them, comma
+        /// separated (`render_to_depth_texture`, `float_depth`, `clip_distances`,
+        /// `depth_clamp`, `separate_stencil`, `stencil_wrap`, `timer_query`; `shadowlab info`
+        /// lists them), so that each fallback can be run anywhere.
+        disable: String = String::new();
+    }
+
     /// Loading Quake 3 maps and models (applied when a scene is loaded).
     group q3: Q3Options {
         /// Quads per side of each 3x3 Bezier patch segment, tessellated once at load (paper 2.3).

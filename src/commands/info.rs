@@ -3,6 +3,7 @@
 use super::{CommonArgs, start_gl};
 use anyhow::Result;
 use serde_json::json;
+use shadowlab::plan::fallback;
 
 #[derive(clap::Args)]
 pub struct Args {
@@ -14,7 +15,9 @@ pub struct Args {
 pub fn run(common: &CommonArgs, args: &Args) -> Result<()> {
     let options = common.options_for(&shadowlab::scene::builtin::default_scene())?;
     let (ctx, renderer) = start_gl(&options)?;
-    let caps = &renderer.caps;
+    let caps = &renderer.caps_for(&options)?;
+    // What these options would run with: each option the GL cannot run, and its replacement.
+    let (_, replaced) = fallback::resolve(&options, |f| caps.has(f));
     let skipped: Vec<String> = ctx
         .skipped
         .iter()
@@ -40,6 +43,7 @@ pub fn run(common: &CommonArgs, args: &Args) -> Result<()> {
             "extension_count": caps.extension_count,
             "features": caps.features,
             "fallbacks": caps.fallbacks(),
+            "options_replaced": replaced,
             "skipped_backends": skipped,
         });
         println!("{}", serde_json::to_string_pretty(&v)?);
@@ -79,6 +83,12 @@ pub fn run(common: &CommonArgs, args: &Args) -> Result<()> {
     );
     for f in fallbacks {
         println!("  {f}");
+    }
+    for r in &replaced {
+        println!(
+            "  these options: {} = {} -> {} (no {})",
+            r.option, r.asked, r.used, r.feature
+        );
     }
     for s in skipped {
         println!("skipped path:   {s}");

@@ -207,6 +207,7 @@ pub fn run(common: &CommonArgs, args: &Args) -> Result<()> {
             "{}",
             serde_json::to_string_pretty(&serde_json::json!({
                 "preset": Preset::matching(&options),
+                "fallbacks": frame.fallbacks,
                 "differs_from_paper": Preset::Paper.differences(&options),
                 "plan": frame.plan_stats,
                 "cache": frame.cache,

@@ -57,6 +57,18 @@ impl Caps {
             .collect()
     }
 
+    /// These capabilities with the features `keys` reported missing (`gl.disable`).
+    pub fn with_disabled(&self, keys: &[&str]) -> Caps {
+        let mut caps = self.clone();
+        for f in caps.features.iter_mut().filter(|f| keys.contains(&f.key)) {
+            if f.supported {
+                f.supported = false;
+                f.detail = format!("disabled by gl.disable ({})", f.detail);
+            }
+        }
+        caps
+    }
+
     /// Whether the renderer is Mesa's software rasterizer.
     pub fn is_software(&self) -> bool {
         let r = self.renderer.to_ascii_lowercase();

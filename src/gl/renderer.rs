@@ -27,6 +27,7 @@ use crate::options::{
     Technique, VolumeShading,
 };
 use crate::plan::auto::CostMemory;
+use crate::plan::fallback;
 use crate::plan::occlusion::DepthPyramid;
 use crate::plan::pass::{PassId, Stage};
 use crate::plan::planner::{DepthNeed, Planner};
@@ -434,14 +435,25 @@ impl Renderer {
         options: &Options,
         request: FrameRequest,
     ) -> Result<Frame, RenderError> {
+        let caps = self.caps_for(options)?;
+        let (options, fallbacks) = fallback::resolve(options, |f| caps.has(f));
+        self.timer.allow_queries(caps.has("timer_query"));
+        let options = &options;
         let plan = self.planner.plan(scene, camera, options);
         let frame_only = request.frame_only;
-        let frame = self.execute(scene, &plan, options, request)?;
+        let mut frame = self.execute(scene, &plan, options, request)?;
+        frame.fallbacks = fallbacks;
         // Frame-only timing has no per-light passes to learn from.
         if !frame_only {
             self.planner.record_costs(&plan, &frame.passes);
         }
         Ok(frame)
+    }
+
+    /// The probed capabilities less the features `gl.disable` names.
+    pub fn caps_for(&self, options: &Options) -> Result<Caps, RenderError> {
+        let disabled = fallback::disabled(options).map_err(RenderError::Unsupported)?;
+        Ok(self.caps.with_disabled(&disabled))
     }
 
     /// What `technique = auto` has measured so far.
@@ -736,6 +748,7 @@ impl<'a> FrameRun<'a> {
             stencil,
             plan_stats: plan.stats.clone(),
             cache: self.cache,
+            fallbacks: Vec::new(),
         })
     }
 
@@ -793,6 +806,7 @@ impl<'a> FrameRun<'a> {
             stencil: None,
             plan_stats: plan.stats.clone(),
             cache: CacheStats::default(),
+            fallbacks: Vec::new(),
         }
     }
 

@@ -15,6 +15,8 @@ enum Span {
 
 pub struct PassTimer {
     use_queries: bool,
+    /// Whether timer queries work here (`use_queries` may be switched off for a frame).
+    queries_work: bool,
     /// This frame times nothing (the CPU clock would need glFinish between passes).
     silent: bool,
     pool: Vec<glow::Query>,
@@ -27,12 +29,18 @@ impl PassTimer {
     pub fn new(use_queries: bool) -> PassTimer {
         PassTimer {
             use_queries,
+            queries_work: use_queries,
             silent: false,
             pool: Vec::new(),
             open: None,
             gpu_done: Vec::new(),
             results: Vec::new(),
         }
+    }
+
+    /// Times with queries only where `allowed` (`gl.disable = timer_query`) and they work.
+    pub fn allow_queries(&mut self, allowed: bool) {
+        self.use_queries = allowed && self.queries_work;
     }
 
     pub fn uses_queries(&self) -> bool {
@@ -59,6 +67,7 @@ impl PassTimer {
                     Ok(q) => q,
                     Err(_) => {
                         self.use_queries = false;
+                        self.queries_work = false;
                         return self.begin(gl, name);
                     }
                 },

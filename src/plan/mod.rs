@@ -7,6 +7,7 @@ mod build;
 pub mod clipped;
 pub mod cull;
 pub mod depth_bounds;
+pub mod fallback;
 pub mod merge;
 pub mod occlusion;
 pub mod pass;

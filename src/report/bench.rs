@@ -13,6 +13,7 @@ use crate::gl::{FrameRequest, RenderError, Renderer};
 use crate::images::Mask;
 use crate::options::{OptionError, Options, Technique};
 use crate::plan::PlanStats;
+use crate::plan::fallback::Fallback;
 use crate::plan::volume_draws::VolumeStats;
 use crate::presets::{Difference, Preset};
 use crate::scene::Scene;
@@ -197,6 +198,8 @@ pub struct BenchRow {
     pub plan: PlanStats,
     /// What the error frame reused from the frames before it.
     pub cache: CacheStats,
+    /// Options the GL could not run (or `gl.disable` hid), and what replaced them.
+    pub fallbacks: Vec<Fallback>,
 }
 
 /// Sums per-light passes into `lights.<stage>` entries, next to the passes themselves.
@@ -219,6 +222,7 @@ struct FrameError {
     volumes: Vec<VolumeStats>,
     plan: PlanStats,
     cache: CacheStats,
+    fallbacks: Vec<Fallback>,
 }
 
 /// The path's first frame of one configuration, with its masks, the exact masks and the error.
@@ -433,6 +437,7 @@ impl<'a> Bench<'a> {
             volumes: c.frame.volumes,
             plan: c.frame.plan_stats,
             cache: c.frame.cache,
+            fallbacks: c.frame.fallbacks,
         })
     }
 
@@ -492,6 +497,7 @@ impl<'a> Bench<'a> {
                 volumes,
                 plan,
                 cache,
+                fallbacks,
             } = self.error(&c.options)?;
             let frame_ms = stats(&m.frame_ms);
             rows.push(BenchRow {
@@ -527,6 +533,7 @@ impl<'a> Bench<'a> {
                 volumes,
                 plan,
                 cache,
+                fallbacks,
             });
             bar.inc(1);
         }

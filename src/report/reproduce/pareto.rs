@@ -187,6 +187,7 @@ mod tests {
             options: Options::default(),
             preset: None,
             differs_from_paper: Vec::new(),
+            fallbacks: Vec::new(),
             width: 1,
             height: 1,
             lights: 1,
