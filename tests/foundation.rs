@@ -116,7 +116,7 @@ fn forcing_a_backend_that_cannot_start_gives_the_documented_error() {
 }
 
 #[test]
-fn info_json_reports_llvmpipe_on_the_egl_path() {
+fn info_json_reports_the_egl_path_and_each_missing_feature_as_a_fallback() {
     let out = shadowlab().args(["info", "--json"]).output().unwrap();
     assert!(
         out.status.success(),
@@ -184,6 +184,8 @@ fn window_path_works_under_xvfb() {
             "render",
             "--backend",
             "window",
+            "--set",
+            "technique=shadow_volume",
             "--out",
         ])
         .arg(&w)
@@ -192,22 +194,52 @@ fn window_path_works_under_xvfb() {
     assert!(status.success());
     assert!(
         shadowlab()
-            .args(["render", "--out"])
+            .args(["render", "--set", "technique=shadow_volume", "--out"])
             .arg(&e)
             .status()
             .unwrap()
             .success()
     );
-    // Both paths render into our own framebuffer on llvmpipe: the same image.
     let (a, b) = (
         image::open(&w).unwrap().to_rgba8(),
         image::open(&e).unwrap().to_rgba8(),
     );
     assert_eq!(a.dimensions(), (640, 480));
     let differing = a.pixels().zip(b.pixels()).filter(|(x, y)| x != y).count();
-    assert!(
-        differing <= 307,
-        "{differing} pixels differ between window and egl"
-    );
+    // Both paths render into our own framebuffer: on the same rasteriser the same image up to
+    // rounding (0.1% of pixels). The window's GL (GLX under Xvfb) may be another rasteriser
+    // than EGL's (a GPU): then the frames must agree in substance, not bit for bit.
+    let renderer = |window: bool| {
+        let mut c = if window {
+            let mut c = Command::new("xvfb-run");
+            c.args(["-a", env!("CARGO_BIN_EXE_shadowlab")]);
+            c
+        } else {
+            shadowlab()
+        };
+        c.args(["info", "--json"]);
+        if window {
+            c.args(["--backend", "window"]);
+        }
+        let out = c.output().unwrap();
+        let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap_or_default();
+        v["renderer"].as_str().unwrap_or("?").to_string()
+    };
+    let (rw, re) = (renderer(true), renderer(false));
+    println!("window ({rw}) against egl ({re}): {differing} pixels differ");
+    if rw == re {
+        assert!(
+            differing <= 307,
+            "{differing} pixels differ between window and egl"
+        );
+    } else {
+        let luma = |i: &image::RgbaImage| i.pixels().map(|p| p[1] as f64).sum::<f64>();
+        let (la, lb) = (luma(&a), luma(&b));
+        assert!(
+            (la - lb).abs() < 0.02 * lb,
+            "mean brightness {la} against {lb}"
+        );
+        assert!(differing < 640 * 480 / 20, "{differing} pixels differ");
+    }
     std::fs::remove_dir_all(&dir).ok();
 }
