@@ -137,6 +137,16 @@ fn info_json_reports_the_egl_path_and_each_missing_feature_as_a_fallback() {
         .filter(|f| f["supported"] == false)
         .count();
     assert_eq!(missing, fallbacks.len());
+    // No options given: the defaults, which differ from the paper's frame in the planner and
+    // the technique only.
+    assert_eq!(v["preset"], "default");
+    let differs: Vec<&str> = v["differs_from_paper"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|d| d["key"].as_str().unwrap())
+        .collect();
+    assert_eq!(differs, ["plan.enabled", "technique"]);
     if v["software"] == true {
         // llvmpipe lacks EXT_depth_bounds_test (DEVELOPERS.md).
         assert!(

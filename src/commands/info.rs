@@ -1,9 +1,11 @@
-//! `shadowlab info`: the context path taken, the capability probe and the fallbacks chosen.
+//! `shadowlab info`: the context path taken, the capability probe, the fallbacks chosen, and
+//! which preset the options equal or how they differ from the paper's frame.
 
 use super::{CommonArgs, start_gl};
 use anyhow::Result;
 use serde_json::json;
 use shadowlab::plan::fallback;
+use shadowlab::presets::Preset;
 
 #[derive(clap::Args)]
 pub struct Args {
@@ -44,6 +46,8 @@ pub fn run(common: &CommonArgs, args: &Args) -> Result<()> {
             "features": caps.features,
             "fallbacks": caps.fallbacks(),
             "options_replaced": replaced,
+            "preset": Preset::matching(&options),
+            "differs_from_paper": Preset::Paper.differences(&options),
             "skipped_backends": skipped,
         });
         println!("{}", serde_json::to_string_pretty(&v)?);
@@ -93,5 +97,22 @@ pub fn run(common: &CommonArgs, args: &Args) -> Result<()> {
     for s in skipped {
         println!("skipped path:   {s}");
     }
+    let differs: Vec<String> = Preset::Paper
+        .differences(&options)
+        .into_iter()
+        .map(|d| format!("{} = {} (paper: {})", d.key, d.value, d.preset))
+        .collect();
+    println!(
+        "preset:         {}",
+        Preset::matching(&options).map_or("none", |p| p.name())
+    );
+    println!(
+        "against the paper: {}",
+        if differs.is_empty() {
+            "the paper's frame".to_string()
+        } else {
+            differs.join(", ")
+        }
+    );
     Ok(())
 }
