@@ -3,7 +3,7 @@
 
 mod common;
 
-use common::{Measurer, load_scene_file, options_with};
+use common::{Measurer, load_scene_file, options_with, stdout_of};
 use shadowlab::presets::Preset;
 use std::process::Command;
 
@@ -58,12 +58,7 @@ fn render_stats_say_which_preset_ran_and_what_differs_from_the_paper() {
             .current_dir(env!("CARGO_MANIFEST_DIR"))
             .output()
             .unwrap();
-        assert!(
-            out.status.success(),
-            "{}",
-            String::from_utf8_lossy(&out.stderr)
-        );
-        let text = String::from_utf8_lossy(&out.stdout).to_string();
+        let text = stdout_of(out);
         let start = text.find("\n{").map_or(0, |i| i + 1);
         let end = text.find("\n}").expect("the stats JSON") + 2;
         serde_json::from_str(&text[start..end]).unwrap_or_else(|e| panic!("{e}: {text}"))

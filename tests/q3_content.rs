@@ -4,7 +4,7 @@
 
 mod common;
 
-use common::{load_scene_file, openarena_data, test_options};
+use common::{load_scene_file, openarena_data, stdout_of, test_options};
 use shadowlab::gl::{Renderer, create_context};
 use shadowlab::options::BackendChoice;
 use shadowlab::q3::builder::SceneBuilder;
@@ -77,12 +77,7 @@ fn inspect(map: &str) -> serde_json::Value {
         .arg(map)
         .output()
         .unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    serde_json::from_slice(&out.stdout).unwrap()
+    serde_json::from_str(&stdout_of(out)).unwrap()
 }
 
 #[test]
@@ -96,12 +91,7 @@ fn inspect_matches_an_independent_count() {
             .arg(map)
             .output()
             .expect("python3 is needed for the independent count (Debian: python3)");
-        assert!(
-            out.status.success(),
-            "{}",
-            String::from_utf8_lossy(&out.stderr)
-        );
-        let theirs: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+        let theirs: serde_json::Value = serde_json::from_str(&stdout_of(out)).unwrap();
         for key in ["faces", "triangles", "lightmaps", "leaves", "clusters"] {
             assert_eq!(ours[key], theirs[key], "{map}: {key}");
         }
@@ -122,12 +112,7 @@ fn inspect_all_prints_one_line_per_map() {
         .arg(openarena_data())
         .output()
         .unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    let lines: Vec<serde_json::Value> = String::from_utf8_lossy(&out.stdout)
+    let lines: Vec<serde_json::Value> = stdout_of(out)
         .lines()
         .map(|l| serde_json::from_str(l).unwrap())
         .collect();

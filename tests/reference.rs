@@ -2,7 +2,7 @@
 
 mod common;
 
-use common::{floor_quad, gl_on, scene_of, test_options};
+use common::{floor_quad, gl_on, scene_of, stdout_of, test_options};
 use glam::Vec3;
 use shadowlab::gl::FrameRequest;
 use shadowlab::images::MaskValue;
@@ -206,12 +206,7 @@ fn bench_json_holds_every_field_for_a_two_configuration_sweep() {
         .arg(&json)
         .output()
         .unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    let table = String::from_utf8_lossy(&out.stdout);
+    let table = stdout_of(out);
     assert!(table.contains("| builtin | lighting.only=0 |"), "{table}");
     let rows: Vec<serde_json::Value> =
         serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();

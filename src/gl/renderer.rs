@@ -461,44 +461,22 @@ impl Renderer {
         self.planner.costs()
     }
 
+    /// The one limit no fallback lifts: a shadow map larger than the GL's textures. (Choices
+    /// that need a missing feature were replaced before planning: `plan::fallback`.)
     fn check_support(&self, options: &Options, plan: &Plan) -> Result<(), RenderError> {
-        if !plan
-            .lights
-            .iter()
-            .any(|l| l.technique == Technique::ShadowMap)
-        {
-            return Ok(());
-        }
-        let o = &options.shadow_map;
+        let size = options.shadow_map.size;
         let max = self.caps.max_texture_size.max(1) as u32;
-        if o.size > max {
+        if plan.any(Technique::ShadowMap) && size > max {
             return Err(RenderError::Unsupported(format!(
-                "shadow_map.size = {} exceeds GL_MAX_TEXTURE_SIZE {max}",
-                o.size
+                "shadow_map.size = {size} exceeds GL_MAX_TEXTURE_SIZE {max}"
             )));
-        }
-        if o.depth_source == crate::options::DepthSource::Fbo
-            && !self.caps.has("render_to_depth_texture")
-        {
-            return Err(RenderError::Unsupported(
-                "shadow_map.depth_source = fbo needs render-to-depth-texture; use copy".into(),
-            ));
-        }
-        if o.depth_bits == DepthBits::D32f && !self.caps.has("float_depth") {
-            return Err(RenderError::Unsupported(
-                "shadow_map.depth_bits = 32f needs float depth textures; use 24".into(),
-            ));
-        }
-        if o.outside == Outside::ClipPlanes && !self.caps.has("clip_distances") {
-            return Err(RenderError::Unsupported(
-                "shadow_map.outside = clip_planes needs 4 clip distances; use range".into(),
-            ));
         }
         Ok(())
     }
 
-    /// Runs the passes of `plan`, then, untimed, the measurement passes the request asks for.
-    pub fn execute(
+    /// Runs the passes of `plan` (made from `options` with their fallbacks already taken),
+    /// then, untimed, the measurement passes the request asks for.
+    fn execute(
         &mut self,
         scene: &Scene,
         plan: &Plan,

@@ -458,10 +458,6 @@ pub struct LightVolumeDraws {
     meshes: HashMap<(usize, PieceId), CachedPart>,
     /// What the buffer holds: a hash of the written parts' keys in order and their length.
     layout: u64,
-    /// Vertices in the buffer: no draw may reach past them.
-    vertex_count: usize,
-    /// This frame's index list (`PartRange::elements`).
-    indices: Vec<u32>,
     /// What the draws were made from (`plan.reuse_volume_draws`; None: not kept).
     inputs: Option<DrawInputs>,
 }
@@ -612,13 +608,11 @@ impl VolumePlanner {
         check_bounds(lp.light, &draws, &layout.indices, layout.vertex_count)?;
         lv.upload = VolumeUpload {
             vertices: (layout.hash != lv.layout || stats.rebuilt).then(|| lv.vertices(&layout)),
-            indices: (!layout.indices.is_empty()).then(|| layout.indices.clone()),
+            indices: (!layout.indices.is_empty()).then_some(layout.indices),
         };
         lv.layout = layout.hash;
-        lv.vertex_count = layout.vertex_count;
         stats.build_ms = start.elapsed().as_secs_f64() * 1e3;
         lv.draws = draws;
-        lv.indices = layout.indices;
         lv.parts = layout.parts;
         lv.inputs = inputs;
         lv.stats = stats;

@@ -6,6 +6,17 @@ use shadowlab::gl::{GlContext, Renderer, create_context};
 use shadowlab::options::{BackendChoice, Options};
 use shadowlab::scene::Scene;
 
+/// The standard output of a finished command, which must have succeeded (its error output is
+/// the failure message otherwise).
+pub fn stdout_of(out: std::process::Output) -> String {
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    String::from_utf8_lossy(&out.stdout).into_owned()
+}
+
 /// A context on `backend` with a renderer for `options`' frame size. Panics with the
 /// context error (which names the packages to install) if the path cannot start.
 pub fn gl_on(backend: BackendChoice, options: &Options) -> (GlContext, Renderer) {
