@@ -314,6 +314,18 @@ macro_rules! define_options {
 }
 
 option_enum! {
+    /// How the passes are drawn.
+    pub enum Pipeline {
+        /// GLSL programs on a core-profile context: every option works (the default).
+        Shaders = "shaders",
+        /// The paper's legacy calls on a compatibility-profile context (glAlphaFunc, glTexGen,
+        /// DEPTH_TEXTURE_MODE, glClipPlane, texture environments, glLight): options it cannot
+        /// draw are replaced and listed as fallbacks (`plan::fixed_function`).
+        FixedFunction = "fixed_function",
+    }
+}
+
+option_enum! {
     /// Which GL context path to take.
     pub enum BackendChoice {
         /// EGL device first, then OSMesa.
@@ -781,6 +793,9 @@ define_options! {
 
     /// The GL the frame runs on.
     group gl: GlOptions {
+        /// `shaders`, or `fixed_function`: the paper's passes with the legacy calls themselves
+        /// (needs a compatibility-profile context, which EGL and OSMesa on Mesa offer).
+        pipeline: Pipeline = Pipeline::Shaders;
         /// Features the capability probe reports missing although the GL has them, comma
         /// separated (`render_to_depth_texture`, `float_depth`, `clip_distances`,
         /// `depth_clamp`, `separate_stencil`, `stencil_wrap`, `timer_query`; `shadowlab info`

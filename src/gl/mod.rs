@@ -5,7 +5,9 @@ pub mod context;
 pub mod debug;
 pub mod depth_reduce;
 pub mod egl;
+pub mod fixed;
 pub mod osmesa;
+pub mod legacy;
 pub mod passes;
 pub mod program;
 pub mod renderer;
@@ -17,5 +19,5 @@ pub mod volumes;
 pub mod walkthrough;
 pub mod window;
 
-pub use context::{Backend, ContextError, GlContext, create_context};
+pub use context::{Backend, ContextError, GlApi, GlContext, Profile, create_context};
 pub use renderer::{FrameRequest, Overlays, RenderError, Renderer};

@@ -9,6 +9,8 @@
 use super::caps::{self, Caps};
 use super::debug;
 use super::depth_reduce::DepthReducer;
+use super::fixed::{self, FixedFunction};
+use super::legacy::Legacy;
 use super::passes::lit::{LitShadow, ShadowBinding};
 use super::passes::shadow_map::{DepthTarget, copies_from_frame, copy_depth};
 use super::passes::{self, PassContext, set_scissor};
@@ -21,13 +23,13 @@ use super::volumes::{LightVolumes, VolumeBuffers};
 use crate::frame::CacheStats;
 use crate::frame::{Frame, Step, StepKind};
 use crate::geometry::projection::cube_face_view;
-use crate::images::{GBuffer, Mask, Rgba, StencilImage};
+use crate::images::{GBuffer, Mask, MaskValue, Rgba, StencilImage};
 use crate::options::{
-    Compare, CompareResult, DepthBits, Filter, Options, Outside, StencilPasses, StencilWrap,
-    Technique, VolumeShading,
+    Compare, CompareResult, DepthBits, Filter, Options, Outside, Pipeline, StencilPasses,
+    StencilWrap, Technique, VolumeShading,
 };
 use crate::plan::auto::CostMemory;
-use crate::plan::fallback;
+use crate::plan::{fallback, fixed_function};
 use crate::plan::occlusion::DepthPyramid;
 use crate::plan::pass::{PassId, Stage};
 use crate::plan::planner::{DepthNeed, Planner};
@@ -39,6 +41,7 @@ use crate::shadow::views::ViewKind;
 use glow::HasContext;
 use std::collections::HashMap;
 use std::ops::ControlFlow;
+use std::rc::Rc;
 use std::sync::Arc;
 use std::time::Instant;
 use thiserror::Error;
@@ -305,6 +308,9 @@ pub struct Renderer {
     /// The planner and what it keeps across frames (costs for `auto`, caster groups, the
     /// depth it read, volume draws).
     planner: Planner,
+    /// The legacy entry points, on a compatibility-profile context (`gl.pipeline =
+    /// fixed_function`).
+    fixed: Option<FixedFunction>,
 }
 
 /// One shadow-mapped view's texture, by light plan and view index.
@@ -353,7 +359,19 @@ impl Renderer {
             depth_reducer: None,
             last_maps: Vec::new(),
             planner: Planner::default(),
+            fixed: None,
         })
+    }
+
+    /// Lets frames with `gl.pipeline = fixed_function` draw through `legacy` (loaded from this
+    /// renderer's context, which must be a compatibility profile).
+    pub fn use_legacy(&mut self, legacy: Rc<Legacy>) -> Result<(), RenderError> {
+        legacy.check(&self.gl).map_err(RenderError::Unsupported)?;
+        if let Some(old) = self.fixed.take() {
+            old.delete(&self.gl);
+        }
+        self.fixed = Some(FixedFunction::new(&self.gl, legacy).map_err(RenderError::Gl)?);
+        Ok(())
     }
 
     pub fn gl(&self) -> &glow::Context {
@@ -436,7 +454,17 @@ impl Renderer {
         request: FrameRequest,
     ) -> Result<Frame, RenderError> {
         let caps = self.caps_for(options)?;
-        let (options, fallbacks) = fallback::resolve(options, |f| caps.has(f));
+        let (options, mut fallbacks) = fallback::resolve(options, |f| caps.has(f));
+        let (options, legacy_replaced) = fixed_function::resolve(&options);
+        fallbacks.extend(legacy_replaced);
+        if options.gl.pipeline == Pipeline::FixedFunction && self.fixed.is_none() {
+            return Err(RenderError::Unsupported(
+                "gl.pipeline = fixed_function needs a compatibility-profile context with the \
+                 legacy entry points (EGL or OSMesa on Mesa give one; the window path and \
+                 OpenGL ES do not)"
+                    .into(),
+            ));
+        }
         self.timer.allow_queries(caps.has("timer_query"));
         let options = &options;
         let plan = self.planner.plan(scene, camera, options);
@@ -521,6 +549,10 @@ impl Renderer {
             cache: CacheStats::default(),
             start: Instant::now(),
             volume_stats: Vec::new(),
+            fixed: self
+                .fixed
+                .as_ref()
+                .filter(|_| options.gl.pipeline == Pipeline::FixedFunction),
         };
         run.run()
     }
@@ -683,6 +715,8 @@ struct FrameRun<'a> {
     cache: CacheStats,
     start: Instant,
     volume_stats: Vec<VolumeStats>,
+    /// The legacy pipeline, when the frame draws with it.
+    fixed: Option<&'a FixedFunction>,
 }
 
 impl<'a> FrameRun<'a> {
@@ -868,18 +902,17 @@ impl<'a> FrameRun<'a> {
         };
         self.timer
             .begin(gl, PassId::light(lp.light, Stage::ShadowMap));
-        passes::shadow_map::render(
-            &self.ctx,
-            &self.programs.depth,
-            &passes::shadow_map::MapView {
-                view_proj,
-                size,
-                cube_face: face,
-                order: lp.order,
-                casters: lp.view_casters.get(vi).map(Vec::as_slice),
-            },
-            &target,
-        );
+        let view = passes::shadow_map::MapView {
+            view_proj,
+            size,
+            cube_face: face,
+            order: lp.order,
+            casters: lp.view_casters.get(vi).map(Vec::as_slice),
+        };
+        match self.fixed {
+            Some(ff) => fixed::shadow_map::render(&self.ctx, ff, &view, &target),
+            None => passes::shadow_map::render(&self.ctx, &self.programs.depth, &view, &target),
+        }
         let copy = self.copy;
         let fbo_of_frame = self.target.fbo;
         go_on!(self.step(StepKind::LightView, Some(lp), shown, |_| {
@@ -907,7 +940,10 @@ impl<'a> FrameRun<'a> {
         let gl = self.ctx.gl;
         self.timer.begin(gl, PassId::frame(Stage::Base));
         self.target.bind(gl);
-        passes::base::draw(&self.ctx, &self.programs.unlit);
+        match self.fixed {
+            Some(ff) => fixed::base::draw(&self.ctx, ff),
+            None => passes::base::draw(&self.ctx, &self.programs.unlit),
+        }
         go_on!(self.step(StepKind::Base, None, None, Self::color_image));
         let need = self.planner.depth_need(
             self.ctx.scene,
@@ -1044,13 +1080,17 @@ impl<'a> FrameRun<'a> {
             } else {
                 self.timer
                     .begin(self.ctx.gl, PassId::light(lp.light, Stage::Lit));
-                draw_maps(
-                    &self.ctx,
-                    lp,
-                    &self.bindings(maps, pi),
-                    |sm, cube, six| self.lit_program(sm, cube, six, false),
-                    false,
-                );
+                let bindings = self.bindings(maps, pi);
+                match self.fixed {
+                    Some(ff) => fixed_maps(&self.ctx, ff, lp, &bindings, false),
+                    None => draw_maps(
+                        &self.ctx,
+                        lp,
+                        &bindings,
+                        |sm, cube, six| self.lit_program(sm, cube, six, false),
+                        false,
+                    ),
+                }
                 go_on!(self.step(StepKind::Lit, Some(lp), None, Self::color_image));
             }
         }
@@ -1067,7 +1107,10 @@ impl<'a> FrameRun<'a> {
         self.timer
             .begin(gl, PassId::light(lp.light, Stage::Stencil));
         if let Some(v) = self.volumes_of(lp) {
-            passes::stencil::draw(&self.ctx, &self.programs.volume, &v, lp.scissor);
+            match self.fixed {
+                Some(ff) => fixed::stencil::draw(&self.ctx, ff, &v, lp.scissor),
+                None => passes::stencil::draw(&self.ctx, &self.programs.volume, &v, lp.scissor),
+            }
         }
         let wraps = o.shadow_volume.wrap == StencilWrap::Wrap
             || self.ctx.plan.stencil == StencilPasses::Separate;
@@ -1089,17 +1132,24 @@ impl<'a> FrameRun<'a> {
             }
         });
         self.timer.begin(gl, PassId::light(lp.light, Stage::Lit));
-        passes::lit::draw(
-            &self.ctx,
-            self.lit_program(false, false, false, false),
-            lp,
-            &LitShadow::Stencil { test: !fill },
-            &lp.receivers,
-        );
+        let shadow = LitShadow::Stencil { test: !fill };
+        match self.fixed {
+            Some(ff) => fixed::lit::draw(&self.ctx, ff, lp, &shadow, &lp.receivers),
+            None => passes::lit::draw(
+                &self.ctx,
+                self.lit_program(false, false, false, false),
+                lp,
+                &shadow,
+                &lp.receivers,
+            ),
+        }
         go_on!(self.step(StepKind::Lit, Some(lp), None, Self::color_image));
         if fill {
             self.timer.begin(gl, PassId::light(lp.light, Stage::Fill));
-            passes::stencil::fill(gl, &self.programs.fill, self.empty_vao, FILL_SHADE);
+            match self.fixed {
+                Some(ff) => fixed::stencil::fill(gl, ff, FILL_SHADE),
+                None => passes::stencil::fill(gl, &self.programs.fill, self.empty_vao, FILL_SHADE),
+            }
             go_on!(self.step(StepKind::Fill, Some(lp), None, Self::color_image));
         }
         Ok(ControlFlow::Continue(stencil))
@@ -1153,6 +1203,19 @@ impl<'a> FrameRun<'a> {
                 gl.clear(glow::COLOR_BUFFER_BIT);
             }
             set_scissor(gl, lp.scissor);
+            if let Some(ff) = self.fixed {
+                self.fixed_mask(ff, lp, &self.bindings(maps, pi));
+                set_scissor(gl, None);
+                let mut values = mtarget.read(gl);
+                keep_reached(&mut values, &gbuffer, &self.ctx.scene.lights[lp.light]);
+                masks.push(Mask {
+                    light: lp.light,
+                    width: mtarget.width,
+                    height: mtarget.height,
+                    values,
+                });
+                continue;
+            }
             match self.volumes_of(lp) {
                 Some(v) => {
                     passes::stencil::draw(&self.ctx, &self.programs.volume, &v, lp.scissor);
@@ -1192,6 +1255,67 @@ impl<'a> FrameRun<'a> {
         masks.sort_by_key(|m| m.light);
         (Some(gbuffer), masks)
     }
+}
+
+/// Sets the mask of light `lp` from the fixed-function passes: its volumes' counts, or its maps.
+impl FrameRun<'_> {
+    fn fixed_mask(
+        &self,
+        ff: &FixedFunction,
+        lp: &LightPlan,
+        bindings: &[(bool, ShadowBinding, &[u32], Option<Scissor>)],
+    ) {
+        match self.volumes_of(lp) {
+            Some(v) => {
+                fixed::stencil::draw(&self.ctx, ff, &v, lp.scissor);
+                let shadow = LitShadow::Stencil { test: true };
+                fixed::lit::draw_mask(&self.ctx, ff, lp, &shadow, &lp.receivers);
+            }
+            None => fixed_maps(&self.ctx, ff, lp, bindings, true),
+        }
+    }
+}
+
+/// The fixed-function pipeline's mask marks every receiver fragment it draws (legacy lighting
+/// reaches per vertex): pixels whose surface the light does not reach (range, cone, facing,
+/// judged as the shader path and the reference judge them) become "not a receiver".
+fn keep_reached(values: &mut [u8], gbuffer: &GBuffer, light: &crate::scene::Light) {
+    for (i, v) in values.iter_mut().enumerate() {
+        let reached = gbuffer.is_receiver_surface(i) && {
+            let p = glam::Vec3::from_array(gbuffer.position[i]).as_dvec3();
+            let n = glam::Vec3::from_array(gbuffer.normal[i]).as_dvec3();
+            light.reaches(p, n)
+        };
+        if !reached {
+            *v = MaskValue::NotReceiver as u8;
+        }
+    }
+}
+
+/// The fixed-function lit (or mask) passes of a light: one per shadow map view, or one without
+/// shadows.
+fn fixed_maps(
+    ctx: &PassContext,
+    ff: &FixedFunction,
+    lp: &LightPlan,
+    bindings: &[(bool, ShadowBinding, &[u32], Option<Scissor>)],
+    mask: bool,
+) {
+    let pass = |s: &LitShadow, receivers: &[u32]| {
+        if mask {
+            fixed::lit::draw_mask(ctx, ff, lp, s, receivers);
+        } else {
+            fixed::lit::draw(ctx, ff, lp, s, receivers);
+        }
+    };
+    if bindings.is_empty() {
+        pass(&LitShadow::None, &lp.receivers);
+    }
+    for (_, b, receivers, rect) in bindings {
+        set_scissor(ctx.gl, *rect);
+        pass(&LitShadow::Map(b), receivers);
+    }
+    set_scissor(ctx.gl, lp.scissor);
 }
 
 /// One light's lit (or mask) passes: one per shadow map view, or one without shadows.
@@ -1274,6 +1398,9 @@ impl Drop for Renderer {
             r.delete(gl);
         }
         self.timer.delete(gl);
+        if let Some(f) = self.fixed.take() {
+            f.delete(gl);
+        }
         // SAFETY: deleting our own VAO once.
         unsafe { gl.delete_vertex_array(self.empty_vao) };
     }

@@ -213,6 +213,11 @@ impl GpuScene {
         items
     }
 
+    /// The vertex and index buffers, for the fixed-function pipeline's client arrays.
+    pub fn buffers(&self) -> (glow::Buffer, glow::Buffer) {
+        (self.vbo, self.ibo)
+    }
+
     pub fn texture_for(&self, scene: &Scene, material: usize) -> glow::Texture {
         scene.materials[material]
             .texture

@@ -18,6 +18,9 @@ struct Buffers {
 #[derive(Clone, Copy)]
 pub struct LightVolumes<'a> {
     pub vao: glow::VertexArray,
+    /// The buffers the array reads (the fixed-function pipeline points its arrays at them).
+    pub vbo: glow::Buffer,
+    pub ebo: glow::Buffer,
     pub draws: &'a [VolumeDraw],
     pub parts: &'a [PartRange],
 }
@@ -75,6 +78,8 @@ impl VolumeBuffers {
     pub fn with<'a>(&self, draws: &'a LightVolumeDraws) -> Option<LightVolumes<'a>> {
         self.lights.get(&draws.light).map(|b| LightVolumes {
             vao: b.vao,
+            vbo: b.vbo,
+            ebo: b.ebo,
             draws: &draws.draws,
             parts: &draws.parts,
         })

@@ -8,6 +8,7 @@ pub mod clipped;
 pub mod cull;
 pub mod depth_bounds;
 pub mod fallback;
+pub mod fixed_function;
 pub mod merge;
 pub mod occlusion;
 pub mod pass;

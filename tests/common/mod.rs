@@ -2,7 +2,7 @@
 #![allow(dead_code)]
 
 use shadowlab::frame::Frame;
-use shadowlab::gl::{GlContext, Renderer, create_context};
+use shadowlab::gl::{GlContext, Profile, Renderer, create_context};
 use shadowlab::options::{BackendChoice, Options};
 use shadowlab::scene::Scene;
 
@@ -20,9 +20,29 @@ pub fn stdout_of(out: std::process::Output) -> String {
 /// A context on `backend` with a renderer for `options`' frame size. Panics with the
 /// context error (which names the packages to install) if the path cannot start.
 pub fn gl_on(backend: BackendChoice, options: &Options) -> (GlContext, Renderer) {
-    let ctx =
-        create_context(backend, options.width, options.height).unwrap_or_else(|e| panic!("{e}"));
+    let ctx = create_context(backend, options.width, options.height, Profile::Core)
+        .unwrap_or_else(|e| panic!("{e}"));
     let renderer = Renderer::new(ctx.gl.clone(), options.width, options.height)
+        .unwrap_or_else(|e| panic!("{e}"));
+    (ctx, renderer)
+}
+
+/// A compatibility-profile context on `backend` with a renderer that can draw
+/// `gl.pipeline = fixed_function` frames (and shader frames).
+pub fn gl_legacy(backend: BackendChoice, options: &Options) -> (GlContext, Renderer) {
+    let ctx = create_context(
+        backend,
+        options.width,
+        options.height,
+        Profile::Compatibility,
+    )
+    .unwrap_or_else(|e| panic!("{e}"));
+    let mut renderer = Renderer::new(ctx.gl.clone(), options.width, options.height)
+        .unwrap_or_else(|e| panic!("{e}"));
+    let legacy = shadowlab::gl::legacy::Legacy::load(|n| ctx.proc_address(n))
+        .unwrap_or_else(|e| panic!("{e}"));
+    renderer
+        .use_legacy(std::rc::Rc::new(legacy))
         .unwrap_or_else(|e| panic!("{e}"));
     (ctx, renderer)
 }
@@ -170,7 +190,15 @@ impl Measured {
 
 impl Measurer {
     pub fn new(scene: Scene, options: &Options) -> Measurer {
-        let (ctx, mut renderer) = gl_on(BackendChoice::Egl, options);
+        Self::on(gl_on(BackendChoice::Egl, options), scene)
+    }
+
+    /// A measurer on a compatibility-profile context (both pipelines).
+    pub fn legacy(backend: BackendChoice, scene: Scene, options: &Options) -> Measurer {
+        Self::on(gl_legacy(backend, options), scene)
+    }
+
+    fn on((ctx, mut renderer): (GlContext, Renderer), scene: Scene) -> Measurer {
         renderer.load_scene(&scene).unwrap();
         let reference = shadowlab::truth::Reference::build(&scene);
         Measurer {

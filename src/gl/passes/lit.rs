@@ -141,7 +141,7 @@ fn bind_light(ctx: &PassContext, program: &Program, lp: &LightPlan, shadow: &Lit
 }
 
 /// Draw only where the stencil compares to 0 with `func` (EQUAL: lit; NOTEQUAL: shadowed).
-fn stencil_gate(gl: &glow::Context, func: u32) {
+pub fn stencil_gate(gl: &glow::Context, func: u32) {
     // SAFETY: fixed-function state.
     unsafe {
         gl.enable(glow::STENCIL_TEST);
@@ -153,7 +153,7 @@ fn stencil_gate(gl: &glow::Context, func: u32) {
     }
 }
 
-fn finish(gl: &glow::Context) {
+pub fn finish(gl: &glow::Context) {
     // SAFETY: state this pass enabled, switched off for the passes that do not set it.
     unsafe {
         gl.disable(glow::STENCIL_TEST);

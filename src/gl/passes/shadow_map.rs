@@ -56,16 +56,28 @@ pub struct MapView<'a> {
 
 /// Draws the view's casters into `target`.
 pub fn render(ctx: &PassContext, program: &Program, view: &MapView, target: &DepthTarget) {
-    let MapView {
-        view_proj,
-        size,
-        cube_face,
-        order,
-        casters,
-    } = *view;
-    let view_proj = &view_proj;
+    begin(ctx, view, target);
     let gl = ctx.gl;
     let o = &ctx.options.shadow_map;
+    program.bind(gl);
+    program.set_mat4(gl, "u_view_proj", &view.view_proj);
+    program.set_i32(gl, "u_texture", 0);
+    draw_items_with(
+        ctx,
+        program,
+        &caster_items(ctx, view),
+        caster_cull(o.cull),
+        o.alpha_casters == AlphaCasters::Test,
+        |_| {},
+    );
+    end(gl, view, target);
+}
+
+/// Binds `target` and sets the depth pass's state: viewport, depth only, cleared, the offset.
+pub fn begin(ctx: &PassContext, view: &MapView, target: &DepthTarget) {
+    let gl = ctx.gl;
+    let o = &ctx.options.shadow_map;
+    let (size, cube_face) = (view.size, view.cube_face);
     // SAFETY: fixed-function state and a depth attachment of our own texture.
     unsafe {
         match target {
@@ -94,7 +106,7 @@ pub fn render(ctx: &PassContext, program: &Program, view: &MapView, target: &Dep
         gl.depth_func(glow::LESS);
         gl.disable(glow::BLEND);
         gl.disable(glow::STENCIL_TEST);
-        match (offset_for(o, order), o.offset_pass) {
+        match (offset_for(o, view.order), o.offset_pass) {
             (Some((factor, units)), OffsetPass::ShadowMap | OffsetPass::Both) => {
                 gl.enable(glow::POLYGON_OFFSET_FILL);
                 gl.polygon_offset(factor, units);
@@ -102,30 +114,29 @@ pub fn render(ctx: &PassContext, program: &Program, view: &MapView, target: &Dep
             _ => gl.disable(glow::POLYGON_OFFSET_FILL),
         }
     }
-    program.bind(gl);
-    program.set_mat4(gl, "u_view_proj", view_proj);
-    program.set_i32(gl, "u_texture", 0);
-    // The plan's casters for this view, or every caster.
-    let items = match casters {
+}
+
+/// The plan's casters for this view, or every caster.
+pub fn caster_items(ctx: &PassContext, view: &MapView) -> Vec<crate::gl::upload::DrawItem> {
+    match view.casters {
         Some(list) => ctx.gpu.draw_list_of(ctx.scene, list),
         None => ctx.gpu.draw_list(ctx.scene, |s| ctx.plan.casters[s]),
-    };
-    // Back faces instead of front faces (thesis 2.2.8) flips every one-sided material's culling.
-    let faces = o.cull;
-    let cull = move |c: Cull| match (faces, c) {
+    }
+}
+
+/// A material's culling in the depth pass: back faces instead of front faces (thesis 2.2.8)
+/// flips every one-sided material's.
+pub fn caster_cull(faces: CasterFaces) -> impl Fn(Cull) -> Cull {
+    move |c: Cull| match (faces, c) {
         (CasterFaces::Front, c) => c,
         (CasterFaces::Back, Cull::Back) => Cull::Front,
         (CasterFaces::Back, Cull::Front) => Cull::Back,
         (CasterFaces::Back, Cull::None) => Cull::None,
-    };
-    draw_items_with(
-        ctx,
-        program,
-        &items,
-        cull,
-        o.alpha_casters == AlphaCasters::Test,
-        |_| {},
-    );
+    }
+}
+
+/// Resets the state `begin` set and detaches the texture from the depth framebuffer.
+pub fn end(gl: &glow::Context, view: &MapView, target: &DepthTarget) {
     // SAFETY: state reset for what follows; the copy reads our own framebuffer.
     unsafe {
         gl.disable(glow::POLYGON_OFFSET_FILL);
@@ -134,7 +145,7 @@ pub fn render(ctx: &PassContext, program: &Program, view: &MapView, target: &Dep
             gl.framebuffer_texture_2d(
                 glow::FRAMEBUFFER,
                 glow::DEPTH_ATTACHMENT,
-                image_target(cube_face),
+                image_target(view.cube_face),
                 None,
                 0,
             );

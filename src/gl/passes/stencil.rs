@@ -19,7 +19,7 @@ use glow::HasContext;
 /// (increment, decrement) operations. One pass always wraps: front and back faces arrive
 /// interleaved, and a saturating DECR at 0 before its INCR would lose a count (the paper pairs
 /// two-sided stencil with EXT_stencil_wrap for this reason).
-fn ops(wrap: StencilWrap, passes: StencilPasses) -> (u32, u32) {
+pub fn ops(wrap: StencilWrap, passes: StencilPasses) -> (u32, u32) {
     match (wrap, passes) {
         (StencilWrap::Saturate, StencilPasses::TwoPass) => (glow::INCR, glow::DECR),
         _ => (glow::INCR_WRAP, glow::DECR_WRAP),
@@ -27,7 +27,7 @@ fn ops(wrap: StencilWrap, passes: StencilPasses) -> (u32, u32) {
 }
 
 /// glStencilOp arguments (sfail, dpfail, dppass) for a face that increments or decrements.
-fn face_op(counting: Counting, op: u32) -> (u32, u32, u32) {
+pub fn face_op(counting: Counting, op: u32) -> (u32, u32, u32) {
     match counting {
         Counting::ZFail => (glow::KEEP, op, glow::KEEP),
         Counting::ZPass => (glow::KEEP, glow::KEEP, op),

@@ -1,0 +1,136 @@
+//! One light's shadow volumes into the stencil with legacy state (paper 4.1): the camera's
+//! (infinite) projection and the caster group's modelview on the matrix stacks, four-component
+//! vertices through glVertexPointer (w = 0 at infinity), two passes with face culling; and the
+//! fill variant's darkening through glRectf.
+
+use super::FixedFunction;
+use crate::gl::legacy;
+use crate::gl::passes::PassContext;
+use crate::gl::passes::state::DrawState;
+use crate::gl::passes::stencil::{face_op, ops};
+use crate::gl::volumes::LightVolumes;
+use crate::options::VolumeProjection;
+use crate::plan::scissor::Scissor;
+use crate::shadow::volume::Counting;
+use glow::HasContext;
+
+fn draw_parts(ctx: &PassContext, ff: &FixedFunction, v: &LightVolumes<'_>, counting: Counting) {
+    let gl = ctx.gl;
+    let view = ctx.plan.camera.view;
+    ff.bind_volumes(gl, v.vbo, v.ebo);
+    // SAFETY: the light's own buffers; ranges lie inside them.
+    unsafe {
+        for d in v.draws.iter().filter(|d| d.counting == counting) {
+            if d.scissor.is_some() {
+                crate::gl::passes::set_scissor(gl, d.scissor);
+            }
+            ff.legacy.load_matrix(legacy::MODELVIEW, &(view * d.model));
+            if d.indexed {
+                gl.draw_elements(glow::TRIANGLES, d.count, glow::UNSIGNED_INT, d.first * 4);
+            } else {
+                gl.draw_arrays(glow::TRIANGLES, d.first, d.count);
+            }
+        }
+    }
+    ff.unbind(gl);
+}
+
+/// Clears the stencil and counts the light's volumes into it, two passes per counting mode
+/// (the legacy path has no glStencilOpSeparate: `plan::fixed_function`).
+pub fn draw(
+    ctx: &PassContext,
+    ff: &FixedFunction,
+    volumes: &LightVolumes<'_>,
+    light_scissor: Option<Scissor>,
+) {
+    let gl = ctx.gl;
+    let o = &ctx.options.shadow_volume;
+    // SAFETY: fixed-function state on the bound framebuffer.
+    unsafe {
+        gl.use_program(None);
+        gl.stencil_mask(0xff);
+        gl.clear_stencil(0);
+        gl.clear(glow::STENCIL_BUFFER_BIT);
+        gl.color_mask(false, false, false, false);
+        gl.depth_mask(false);
+        gl.enable(glow::DEPTH_TEST);
+        gl.depth_func(glow::LESS);
+        gl.disable(glow::BLEND);
+        gl.enable(glow::STENCIL_TEST);
+        gl.stencil_func(glow::ALWAYS, 0, 0xff);
+        if o.depth_offset {
+            gl.enable(glow::POLYGON_OFFSET_FILL);
+            gl.polygon_offset(0.0, 1.0);
+        } else {
+            gl.disable(glow::POLYGON_OFFSET_FILL);
+        }
+        if o.projection == VolumeProjection::DepthClamp {
+            gl.enable(glow::DEPTH_CLAMP);
+        }
+        ff.legacy
+            .load_matrix(legacy::PROJECTION, &ctx.plan.camera.projection);
+    }
+    // The same transform as the unlit pass: front caps land on their casters' depths.
+    ff.clip_planes(gl, None);
+    let (incr, decr) = ops(o.wrap, ctx.plan.stencil);
+    for counting in [Counting::ZFail, Counting::ZPass] {
+        if !volumes.draws.iter().any(|d| d.counting == counting) {
+            continue;
+        }
+        let (incr_face, decr_face) = match counting {
+            Counting::ZFail => (glow::BACK, glow::FRONT),
+            Counting::ZPass => (glow::FRONT, glow::BACK),
+        };
+        for (face, op) in [(incr_face, incr), (decr_face, decr)] {
+            let (sfail, dpfail, dppass) = face_op(counting, op);
+            // SAFETY: fixed-function state: draw only `face`, cull the other.
+            unsafe {
+                gl.enable(glow::CULL_FACE);
+                gl.cull_face(if face == glow::BACK {
+                    glow::FRONT
+                } else {
+                    glow::BACK
+                });
+                gl.stencil_op(sfail, dpfail, dppass);
+            }
+            draw_parts(ctx, ff, volumes, counting);
+        }
+    }
+    crate::gl::passes::set_scissor(gl, light_scissor);
+    ff.reset(gl);
+    // SAFETY: state reset for the lit pass, which sets what it needs.
+    unsafe {
+        gl.stencil_op(glow::KEEP, glow::KEEP, glow::KEEP);
+        gl.disable(glow::POLYGON_OFFSET_FILL);
+        gl.disable(glow::DEPTH_CLAMP);
+        gl.color_mask(true, true, true, true);
+    }
+}
+
+/// The fill variant: where the stencil is not zero, scale the frame by `shade` and zero the
+/// stencil, with one glRectf over the viewport (identity matrices).
+pub fn fill(gl: &glow::Context, ff: &FixedFunction, shade: f32) {
+    DrawState {
+        color_write: true,
+        depth_write: false,
+        depth_test: None,
+        blend: Some((glow::DST_COLOR, glow::ZERO)),
+        stencil_test: true,
+        polygon_offset: None,
+    }
+    .apply(gl);
+    ff.reset(gl);
+    // SAFETY: fixed-function state; glRectf draws in the identity's clip space.
+    unsafe {
+        gl.use_program(None);
+        gl.disable(glow::CULL_FACE);
+        gl.stencil_func(glow::NOTEQUAL, 0, 0xff);
+        gl.stencil_op(glow::KEEP, glow::KEEP, glow::ZERO);
+        (ff.legacy.color_4f)(shade, shade, shade, 1.0);
+        (ff.legacy.rect_f)(-1.0, -1.0, 1.0, 1.0);
+        (ff.legacy.color_4f)(1.0, 1.0, 1.0, 1.0);
+        gl.stencil_op(glow::KEEP, glow::KEEP, glow::KEEP);
+        gl.disable(glow::BLEND);
+        gl.enable(glow::DEPTH_TEST);
+    }
+}
