@@ -9,7 +9,7 @@ pub mod reproduce;
 pub mod view;
 
 use anyhow::{Context, Result};
-use shadowlab::gl::{GlContext, Renderer, create_context};
+use shadowlab::gl::{GlContext, Profile, Renderer, create_context};
 use shadowlab::options::{BackendChoice, OptionValue, Options};
 use shadowlab::presets::Preset;
 use shadowlab::scene::{Scene, builtin};
@@ -20,8 +20,8 @@ use shadowlab::scene_file::load::{LoadError, layered_options, load_file};
 /// Arguments every command accepts.
 #[derive(clap::Args, Clone, Default)]
 pub struct CommonArgs {
-    /// GL context path: auto (egl, then osmesa), egl, osmesa or window.
-    #[arg(long, global = true, value_name = "auto|egl|osmesa|window")]
+    /// GL context path: auto (egl, then egl_es, then osmesa), egl, egl_es, osmesa or window.
+    #[arg(long, global = true, value_name = "auto|egl|egl_es|osmesa|window")]
     pub backend: Option<String>,
     /// A named set of option values, applied before `--set`: `paper` (the paper's frame and
     /// choices) or `default`; `shadowlab options` lists their values.
@@ -126,7 +126,12 @@ pub fn enclosed_light_warnings(scene: &Scene) -> Vec<String> {
 
 /// A context on the chosen path and a renderer on it.
 pub fn start_gl(options: &Options) -> Result<(GlContext, Renderer)> {
-    let ctx = create_context(options.backend, options.width, options.height)?;
+    let ctx = create_context(
+        options.backend,
+        options.width,
+        options.height,
+        Profile::Core,
+    )?;
     let renderer = Renderer::new(ctx.gl.clone(), options.width, options.height)?;
     Ok((ctx, renderer))
 }

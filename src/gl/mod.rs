@@ -17,5 +17,5 @@ pub mod volumes;
 pub mod walkthrough;
 pub mod window;
 
-pub use context::{Backend, ContextError, GlContext, create_context};
+pub use context::{Backend, ContextError, GlApi, GlContext, Profile, create_context};
 pub use renderer::{FrameRequest, Overlays, RenderError, Renderer};

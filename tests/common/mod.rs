@@ -2,7 +2,7 @@
 #![allow(dead_code)]
 
 use shadowlab::frame::Frame;
-use shadowlab::gl::{GlContext, Renderer, create_context};
+use shadowlab::gl::{GlContext, Profile, Renderer, create_context};
 use shadowlab::options::{BackendChoice, Options};
 use shadowlab::scene::Scene;
 
@@ -20,8 +20,8 @@ pub fn stdout_of(out: std::process::Output) -> String {
 /// A context on `backend` with a renderer for `options`' frame size. Panics with the
 /// context error (which names the packages to install) if the path cannot start.
 pub fn gl_on(backend: BackendChoice, options: &Options) -> (GlContext, Renderer) {
-    let ctx =
-        create_context(backend, options.width, options.height).unwrap_or_else(|e| panic!("{e}"));
+    let ctx = create_context(backend, options.width, options.height, Profile::Core)
+        .unwrap_or_else(|e| panic!("{e}"));
     let renderer = Renderer::new(ctx.gl.clone(), options.width, options.height)
         .unwrap_or_else(|e| panic!("{e}"));
     (ctx, renderer)
