@@ -398,6 +398,16 @@ pub fn probe(gl: &glow::Context, fb_depth_stencil: (i32, i32)) -> Caps {
     );
     let float_depth = depth_texture_attachable(gl, glow::DEPTH_COMPONENT32F, glow::FLOAT);
     // ES forbids it by the letter (Mesa's ES accepts it anyway): not relied on there.
+    add(
+        "depth_read",
+        !es,
+        if es {
+            "glReadPixels of depth (ES 3.0 reads colour only)".into()
+        } else {
+            "glReadPixels of depth (GL 1.0)".into()
+        },
+        "the depth pyramid reduced by a shader and read as colour (plan.reduce_depth)",
+    );
     let depth_copy = !es && depth_copy_works(gl);
     add(
         "depth_copy",

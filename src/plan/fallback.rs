@@ -9,9 +9,10 @@ use crate::options::{
 use serde::Serialize;
 
 /// The features `gl.disable` may name (those a fallback exists for).
-pub const FEATURES: [&str; 8] = [
+pub const FEATURES: [&str; 9] = [
     "render_to_depth_texture",
     "depth_copy",
+    "depth_read",
     "float_depth",
     "clip_distances",
     "depth_clamp",
@@ -83,6 +84,10 @@ pub fn resolve(options: &Options, has: impl Fn(&str) -> bool) -> (Options, Vec<F
         && o.shadow_map.depth_source == DepthSource::Copy
     {
         fall("depth_copy", "shadow_map.depth_source", &mut o, "fbo");
+    }
+    // ES 3.0 reads no depth: the planner's depth comes reduced by a shader, read as colour.
+    if !has("depth_read") && !o.plan.reduce_depth {
+        fall("depth_read", "plan.reduce_depth", &mut o, "true");
     }
     if !has("float_depth") && o.shadow_map.depth_bits == DepthBits::D32f {
         fall("float_depth", "shadow_map.depth_bits", &mut o, "24");
@@ -164,6 +169,11 @@ mod tests {
         // Neither way to fill a map: nothing to fall back to.
         let neither = |f: &str| f != "depth_copy" && f != "render_to_depth_texture";
         assert_eq!(resolve(&copy, neither).1, vec![]);
+        let mut whole = asked.clone();
+        whole.set("plan.reduce_depth", "false").unwrap();
+        let (o, taken) = resolve(&whole, without("depth_read"));
+        assert!(o.plan.reduce_depth);
+        assert_eq!(taken.len(), 1);
         let (o, keys) = options_of("float_depth");
         assert_eq!(o.shadow_map.depth_bits, DepthBits::D24);
         assert_eq!(keys, ["shadow_map.depth_bits"]);
