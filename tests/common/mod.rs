@@ -170,7 +170,12 @@ impl Measured {
 
 impl Measurer {
     pub fn new(scene: Scene, options: &Options) -> Measurer {
-        let (ctx, mut renderer) = gl_on(BackendChoice::Egl, options);
+        Measurer::on(BackendChoice::Egl, scene, options)
+    }
+
+    /// A measurer whose frames render on `backend`.
+    pub fn on(backend: BackendChoice, scene: Scene, options: &Options) -> Measurer {
+        let (ctx, mut renderer) = gl_on(backend, options);
         renderer.load_scene(&scene).unwrap();
         let reference = shadowlab::truth::Reference::build(&scene);
         Measurer {
@@ -179,6 +184,10 @@ impl Measurer {
             renderer,
             exact: shadowlab::truth::ExactMasks::with_reference(reference),
         }
+    }
+
+    pub fn context(&self) -> &shadowlab::gl::GlContext {
+        &self.ctx
     }
 
     pub fn renderer(&mut self) -> &mut shadowlab::gl::Renderer {
