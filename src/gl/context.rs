@@ -283,12 +283,15 @@ fn failing_on_purpose() -> Vec<Backend> {
         .collect()
 }
 
+/// Each failed path with its reason.
+pub type Failures = Vec<(Backend, String)>;
+
 /// Runs `attempt` on each path of `order` until one succeeds: that result, the path, and the
 /// failures before it; or every path's failure.
 pub fn first_that_works<T>(
     order: &[Backend],
     mut attempt: impl FnMut(Backend) -> Result<T, String>,
-) -> Result<(T, Backend, Vec<(Backend, String)>), Vec<(Backend, String)>> {
+) -> Result<(T, Backend, Failures), Failures> {
     let mut failures = Vec::new();
     for &backend in order {
         match attempt(backend) {
