@@ -10,8 +10,12 @@ invariant gl_Position;
 
 void main() {
     gl_Position = u_view_proj * (u_model * a_position);
+    // Without gl_ClipDistance (GLSL ES) the planner's depth clip is off (the clip_distances
+    // fallback): every draw's planes are zero and clip nothing.
+#ifdef HAS_CLIP_DISTANCE
     gl_ClipDistance[0] = dot(u_depth_clip[0], gl_Position);
     gl_ClipDistance[1] = dot(u_depth_clip[1], gl_Position);
     gl_ClipDistance[2] = dot(u_depth_clip[2], gl_Position);
     gl_ClipDistance[3] = dot(u_depth_clip[3], gl_Position);
+#endif
 }

@@ -32,7 +32,9 @@ out vec4 v_shadow;
 #endif
 #endif
 
-#ifdef CLIP_PLANES
+// Only where gl_ClipDistance exists (HAS_CLIP_DISTANCE, see gl/program.rs); elsewhere the
+// planner never asks for clip planes (the clip_distances fallback).
+#if defined(CLIP_PLANES) && defined(HAS_CLIP_DISTANCE)
 uniform vec4 u_clip_planes[4]; // the light frustum's sides, world space, inside >= 0
 out float gl_ClipDistance[4];  // sized, so a loop may index it (GLSL 3.30)
 #endif
@@ -53,7 +55,7 @@ void main() {
     v_shadow = u_texgen * (u_view * world);
 #endif
 #endif
-#ifdef CLIP_PLANES
+#if defined(CLIP_PLANES) && defined(HAS_CLIP_DISTANCE)
     for (int i = 0; i < 4; i++) gl_ClipDistance[i] = dot(u_clip_planes[i], world);
 #endif
     gl_Position = u_view_proj * world;

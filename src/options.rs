@@ -328,10 +328,15 @@ option_enum! {
 option_enum! {
     /// Which GL context path to take.
     pub enum BackendChoice {
-        /// EGL device first, then OSMesa.
+        /// The chain: EGL desktop GL 3.3 core, then EGL OpenGL ES 3.0, then OSMesa (for the
+        /// compatibility profile: EGL, then OSMesa).
         Auto = "auto",
-        /// EGL device platform, surfaceless context, rendering into our own framebuffers.
+        /// EGL device platform, surfaceless desktop GL context, rendering into our own
+        /// framebuffers.
         Egl = "egl",
+        /// EGL device platform, OpenGL ES 3.0 (GLSL ES 3.00 shaders; what ES lacks falls back,
+        /// see docs/gl-paths.md).
+        EglEs = "egl_es",
         /// libOSMesa loaded at run time.
         Osmesa = "osmesa",
         /// A winit window with a glutin context (needs a display, e.g. `xvfb-run`).
@@ -575,7 +580,7 @@ define_options! {
         width: u32 = 640, in 16 ..= 16384;
         /// Frame height in pixels.
         height: u32 = 480, in 16 ..= 16384;
-        /// GL context path: auto tries egl, then osmesa.
+        /// GL context path: auto tries egl (desktop GL), then egl_es (OpenGL ES 3.0), then osmesa.
         backend: BackendChoice = BackendChoice::Auto;
         /// For `technique = auto`: the share of a light's receiver pixels, in percent, its
         /// technique may be expected to get wrong (see `plan::auto` for the estimates).

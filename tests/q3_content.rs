@@ -5,7 +5,7 @@
 mod common;
 
 use common::{load_scene_file, openarena_data, stdout_of, test_options};
-use shadowlab::gl::{Renderer, create_context};
+use shadowlab::gl::{Profile, Renderer, create_context};
 use shadowlab::options::BackendChoice;
 use shadowlab::q3::builder::SceneBuilder;
 use shadowlab::q3::pk3::Vfs;
@@ -25,7 +25,7 @@ fn every_map_in_the_data_set_loads_and_renders_a_frame() {
     let mut options = test_options();
     options.set("width", "160").unwrap();
     options.set("height", "120").unwrap();
-    let ctx = create_context(BackendChoice::Egl, 160, 120).unwrap();
+    let ctx = create_context(BackendChoice::Egl, 160, 120, Profile::Core).unwrap();
     let mut renderer = Renderer::new(ctx.gl.clone(), 160, 120).unwrap();
     for map in &maps {
         let mut builder = SceneBuilder::new(map, &shaders);

@@ -28,6 +28,7 @@ pub fn run(common: &CommonArgs, args: &Args) -> Result<()> {
     if args.json {
         let v = json!({
             "backend": ctx.backend.as_str(),
+            "api": ctx.api,
             "device": ctx.device,
             "renderer": caps.renderer,
             "vendor": caps.vendor,
@@ -54,6 +55,7 @@ pub fn run(common: &CommonArgs, args: &Args) -> Result<()> {
         return Ok(());
     }
     println!("backend:        {} ({})", ctx.backend, ctx.device);
+    println!("API:            {}", ctx.api);
     println!("renderer:       {}", caps.renderer);
     println!("vendor:         {}", caps.vendor);
     println!(

@@ -2,7 +2,13 @@
 //! feature selects.
 //!
 //! Features are tested by using them (attach a depth texture and check completeness, run a timer
-//! query) rather than by trusting extension strings alone.
+//! query, copy depth) rather than by trusting extension strings alone.
+//!
+//! On an OpenGL ES context the renderer uses ES 3.0 and GLSL ES 3.00 (whatever 3.x the driver
+//! gives), so features ES 3.0 lacks are reported missing unless an ES extension gives them:
+//! clip distances (none in GLSL ES 3.00), depth clamp (`GL_EXT_depth_clamp`), timer queries
+//! (`GL_EXT_disjoint_timer_query`), depth copies (ES's glCopyTexSubImage2D takes colour only;
+//! some drivers accept depth anyway, which is not relied on).
 
 use glow::HasContext;
 use serde::Serialize;
@@ -115,7 +121,8 @@ fn depth_texture_attachable(gl: &glow::Context, internal_format: u32, ty: u32) -
                     Some(tex),
                     0,
                 );
-                gl.draw_buffer(glow::NONE);
+                // glDrawBuffers, not glDrawBuffer: ES 3.0 has only the former.
+                gl.draw_buffers(&[glow::NONE]);
                 gl.read_buffer(glow::NONE);
                 let status = gl.check_framebuffer_status(glow::FRAMEBUFFER);
                 gl.bind_framebuffer(glow::FRAMEBUFFER, None);
@@ -209,6 +216,58 @@ fn timer_query_check(gl: &glow::Context) -> (bool, String) {
     }
 }
 
+/// Whether glCopyTexSubImage2D copies a framebuffer's depth into a depth texture (desktop GL
+/// 1.1; ES 3.0 copies colour only and raises INVALID_OPERATION).
+fn depth_copy_works(gl: &glow::Context) -> bool {
+    const SIDE: i32 = 16;
+    // SAFETY: scratch textures and a framebuffer are created, used and deleted here; bindings
+    // are reset to 0.
+    unsafe {
+        let (Ok(source), Ok(dest), Ok(fbo)) = (
+            gl.create_texture(),
+            gl.create_texture(),
+            gl.create_framebuffer(),
+        ) else {
+            return false;
+        };
+        for t in [source, dest] {
+            gl.bind_texture(glow::TEXTURE_2D, Some(t));
+            gl.tex_image_2d(
+                glow::TEXTURE_2D,
+                0,
+                glow::DEPTH_COMPONENT24 as i32,
+                SIDE,
+                SIDE,
+                0,
+                glow::DEPTH_COMPONENT,
+                glow::UNSIGNED_INT,
+                glow::PixelUnpackData::Slice(None),
+            );
+        }
+        gl.bind_framebuffer(glow::FRAMEBUFFER, Some(fbo));
+        gl.framebuffer_texture_2d(
+            glow::FRAMEBUFFER,
+            glow::DEPTH_ATTACHMENT,
+            glow::TEXTURE_2D,
+            Some(source),
+            0,
+        );
+        gl.draw_buffers(&[glow::NONE]);
+        gl.read_buffer(glow::NONE);
+        let complete = gl.check_framebuffer_status(glow::FRAMEBUFFER) == glow::FRAMEBUFFER_COMPLETE;
+        clear_errors(gl);
+        // `dest` is still bound.
+        gl.copy_tex_sub_image_2d(glow::TEXTURE_2D, 0, 0, 0, 0, 0, SIDE, SIDE);
+        let ok = complete && gl.get_error() == glow::NO_ERROR;
+        gl.bind_framebuffer(glow::FRAMEBUFFER, None);
+        gl.bind_texture(glow::TEXTURE_2D, None);
+        gl.delete_framebuffer(fbo);
+        gl.delete_texture(source);
+        gl.delete_texture(dest);
+        ok
+    }
+}
+
 /// Whether enabling `cap` raises no error.
 fn enable_works(gl: &glow::Context, cap: u32) -> bool {
     // SAFETY: the capability is enabled and immediately disabled again.
@@ -237,8 +296,16 @@ pub fn probe(gl: &glow::Context, fb_depth_stencil: (i32, i32)) -> Caps {
         get_i(gl, glow::MAJOR_VERSION),
         get_i(gl, glow::MINOR_VERSION),
     );
-    let profile_mask = get_i(gl, glow::CONTEXT_PROFILE_MASK);
-    let profile = if profile_mask & glow::CONTEXT_CORE_PROFILE_BIT as i32 != 0 {
+    let es = gl.version().is_embedded;
+    // ES has no profile mask (the query is an error there).
+    let profile_mask = if es {
+        0
+    } else {
+        get_i(gl, glow::CONTEXT_PROFILE_MASK)
+    };
+    let profile = if es {
+        "es"
+    } else if profile_mask & glow::CONTEXT_CORE_PROFILE_BIT as i32 != 0 {
         "core"
     } else if profile_mask & glow::CONTEXT_COMPATIBILITY_PROFILE_BIT as i32 != 0 {
         "compatibility"
@@ -246,7 +313,14 @@ pub fn probe(gl: &glow::Context, fb_depth_stencil: (i32, i32)) -> Caps {
         "unknown"
     };
     let at_least = |ma: i32, mi: i32| (major, minor) >= (ma, mi);
-    let max_clip_distances = get_i(gl, glow::MAX_CLIP_DISTANCES);
+    // The shaders use gl_ClipDistance only where it is core (see program::has_clip_distances):
+    // ES 3.x counts here would come from an extension the shaders do not enable.
+    let clip_shaders = super::program::has_clip_distances(gl);
+    let max_clip_distances = if clip_shaders {
+        get_i(gl, glow::MAX_CLIP_DISTANCES)
+    } else {
+        0
+    };
     let has_ext = |e: &str| extensions.contains(e);
 
     let mut features = Vec::new();
@@ -270,12 +344,20 @@ pub fn probe(gl: &glow::Context, fb_depth_stencil: (i32, i32)) -> Caps {
         "INCR_WRAP / DECR_WRAP (GL 1.4)".into(),
         "saturating INCR / DECR (the paper's card)",
     );
-    let depth_clamp =
-        (at_least(3, 2) || has_ext("GL_ARB_depth_clamp")) && enable_works(gl, glow::DEPTH_CLAMP);
+    // GL_DEPTH_CLAMP_EXT of ES has the same value.
+    let depth_clamp = if es {
+        has_ext("GL_EXT_depth_clamp")
+    } else {
+        at_least(3, 2) || has_ext("GL_ARB_depth_clamp")
+    } && enable_works(gl, glow::DEPTH_CLAMP);
     add(
         "depth_clamp",
         depth_clamp,
-        "GL_DEPTH_CLAMP (GL 3.2)".into(),
+        if es {
+            "GL_DEPTH_CLAMP (ES: GL_EXT_depth_clamp)".into()
+        } else {
+            "GL_DEPTH_CLAMP (GL 3.2)".into()
+        },
         "infinite far-plane projection instead of depth clamping",
     );
     let depth_bounds = has_ext("GL_EXT_depth_bounds_test");
@@ -289,7 +371,14 @@ pub fn probe(gl: &glow::Context, fb_depth_stencil: (i32, i32)) -> Caps {
         },
         "scissor rectangles only",
     );
-    let (timer, timer_detail) = if at_least(3, 3) || has_ext("GL_ARB_timer_query") {
+    let (timer, timer_detail) = if es {
+        // Same GL_TIME_ELAPSED(_EXT) value and entry points on ES with the extension.
+        if has_ext("GL_EXT_disjoint_timer_query") {
+            timer_query_check(gl)
+        } else {
+            (false, "GL_EXT_disjoint_timer_query missing (ES)".into())
+        }
+    } else if at_least(3, 3) || has_ext("GL_ARB_timer_query") {
         timer_query_check(gl)
     } else {
         (false, "GL_ARB_timer_query missing".into())
@@ -308,6 +397,28 @@ pub fn probe(gl: &glow::Context, fb_depth_stencil: (i32, i32)) -> Caps {
         "copy from the framebuffer (glCopyTexSubImage2D, the paper)",
     );
     let float_depth = depth_texture_attachable(gl, glow::DEPTH_COMPONENT32F, glow::FLOAT);
+    // ES forbids it by the letter (Mesa's ES accepts it anyway): not relied on there.
+    add(
+        "depth_read",
+        !es,
+        if es {
+            "glReadPixels of depth (ES 3.0 reads colour only)".into()
+        } else {
+            "glReadPixels of depth (GL 1.0)".into()
+        },
+        "the depth pyramid reduced by a shader and read as colour (plan.reduce_depth)",
+    );
+    let depth_copy = !es && depth_copy_works(gl);
+    add(
+        "depth_copy",
+        depth_copy,
+        if es {
+            "glCopyTexSubImage2D from a depth buffer (ES 3.0 copies colour only)".into()
+        } else {
+            "glCopyTexSubImage2D from a depth buffer (GL 1.1)".into()
+        },
+        "render into the depth texture (framebuffer object)",
+    );
     add(
         "float_depth",
         float_depth,
@@ -317,7 +428,11 @@ pub fn probe(gl: &glow::Context, fb_depth_stencil: (i32, i32)) -> Caps {
     add(
         "clip_distances",
         max_clip_distances >= 6,
-        format!("{max_clip_distances} gl_ClipDistance planes"),
+        if clip_shaders {
+            format!("{max_clip_distances} gl_ClipDistance planes")
+        } else {
+            "GLSL ES 3.00 has no gl_ClipDistance".into()
+        },
         "texgen range test instead of light-frustum clip planes",
     );
     add(

@@ -1,9 +1,26 @@
 //! Reading buffers back as images for the debug views and the walkthrough: depth (of the frame
 //! or a shadow map) as grey, stencil counts as a heat map.
+//!
+//! OpenGL ES 3.0 reads neither depth nor stencil (glReadPixels takes colour only) and has no
+//! glGetTexImage. There these readers return cleared values (depth 1.0, stencil 0) without a GL
+//! call, so the debug images are blank rather than the frame failing on a GL error; the planner's
+//! own depth read takes the `depth_read` fallback (plan::fallback) instead.
 
 use super::target::{flip_rows, read_pixels, read_pixels_bottom_up};
 use crate::images::Rgba;
 use glow::HasContext;
+
+/// Whether depth and stencil can be read back here (not on ES); logs once when not.
+fn readable(gl: &glow::Context) -> bool {
+    static WARNED: std::sync::Once = std::sync::Once::new();
+    let es = gl.version().is_embedded;
+    if es {
+        WARNED.call_once(|| {
+            log::warn!("OpenGL ES reads back no depth or stencil: the debug images are blank")
+        });
+    }
+    !es
+}
 
 /// The depth values of a framebuffer's `w`×`h` corner in GL's row order (bottom row first),
 /// as the depth pyramid takes them.
@@ -13,6 +30,9 @@ pub fn read_depth_bottom_up(
     w: u32,
     h: u32,
 ) -> Vec<f32> {
+    if !readable(gl) {
+        return vec![1.0; (w * h) as usize];
+    }
     read_pixels_bottom_up(
         gl,
         Some(fbo),
@@ -25,6 +45,9 @@ pub fn read_depth_bottom_up(
 
 /// The depth values of a framebuffer's `w`×`h` corner, top row first.
 pub fn read_depth(gl: &glow::Context, fbo: glow::Framebuffer, w: u32, h: u32) -> Vec<f32> {
+    if !readable(gl) {
+        return vec![1.0; (w * h) as usize];
+    }
     read_pixels(
         gl,
         Some(fbo),
@@ -37,6 +60,9 @@ pub fn read_depth(gl: &glow::Context, fbo: glow::Framebuffer, w: u32, h: u32) ->
 
 /// The stencil values of a framebuffer's `w`×`h` corner, top row first.
 pub fn read_stencil(gl: &glow::Context, fbo: glow::Framebuffer, w: u32, h: u32) -> Vec<u8> {
+    if !readable(gl) {
+        return vec![0; (w * h) as usize];
+    }
     read_pixels(
         gl,
         Some(fbo),
@@ -54,7 +80,10 @@ pub fn read_depth_texture(
     face: Option<usize>,
     size: u32,
 ) -> Vec<f32> {
-    let mut data = vec![0f32; (size * size) as usize];
+    let mut data = vec![1f32; (size * size) as usize];
+    if !readable(gl) {
+        return data;
+    }
     let (bind, target) = match face {
         Some(f) => (
             glow::TEXTURE_CUBE_MAP,

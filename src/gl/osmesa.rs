@@ -14,6 +14,7 @@ const OSMESA_DEPTH_BITS: c_int = 0x30;
 const OSMESA_STENCIL_BITS: c_int = 0x31;
 const OSMESA_PROFILE: c_int = 0x33;
 const OSMESA_CORE_PROFILE: c_int = 0x34;
+const OSMESA_COMPAT_PROFILE: c_int = 0x35;
 const OSMESA_CONTEXT_MAJOR_VERSION: c_int = 0x36;
 const OSMESA_CONTEXT_MINOR_VERSION: c_int = 0x37;
 const GL_UNSIGNED_BYTE: c_uint = 0x1401;
@@ -34,10 +35,19 @@ pub struct OsMesaHolder {
     context: OsMesaContext,
     make_current: MakeCurrent,
     current: GetCurrentContext,
+    get_proc: GetProcAddress,
     destroy: DestroyContext,
     _buffer: Vec<u8>,
     // Dropped last: the function pointers above point into it.
     _library: Library,
+}
+
+impl OsMesaHolder {
+    /// The address of GL function `name` (for entry points glow lacks: the legacy calls).
+    pub fn proc_address(&self, name: &CStr) -> *const c_void {
+        // SAFETY: OSMesaGetProcAddress takes a NUL-terminated name; the library is loaded.
+        unsafe { (self.get_proc)(name.as_ptr()) }
+    }
 }
 
 impl Drop for OsMesaHolder {
@@ -76,9 +86,10 @@ fn load_library(override_path: Option<&str>) -> Result<(Library, String), String
     Err(format!("libOSMesa not found ({})", errors.join("; ")))
 }
 
-/// Creates a current GL 3.3 core context with OSMesa, from `library` if given, else from the
-/// standard library names.
-pub fn create(library: Option<&str>) -> Result<OsMesaContextBundle, String> {
+/// Creates a current context with OSMesa, from `library` if given, else from the standard
+/// library names: GL 3.3 core, or with `compatibility` a compatibility-profile context of at
+/// least GL 3.0 (Mesa gives its highest), where the legacy calls stay available.
+pub fn create(library: Option<&str>, compatibility: bool) -> Result<OsMesaContextBundle, String> {
     let (library, name) = load_library(library)?;
     // SAFETY: the symbol types match GL/osmesa.h.
     let (create_attribs, make_current, get_proc, destroy, current) = unsafe {
@@ -99,6 +110,15 @@ pub fn create(library: Option<&str>) -> Result<OsMesaContextBundle, String> {
             .map_err(|e| format!("{name} lacks OSMesaGetCurrentContext: {e}"))?;
         (*c, *m, *g, *d, *cur)
     };
+    let (profile, minor, what) = if compatibility {
+        (
+            OSMESA_COMPAT_PROFILE,
+            0,
+            "a GL compatibility-profile context",
+        )
+    } else {
+        (OSMESA_CORE_PROFILE, 3, "a GL 3.3 core context")
+    };
     let attributes: [c_int; 13] = [
         OSMESA_FORMAT,
         OSMESA_RGBA,
@@ -107,19 +127,17 @@ pub fn create(library: Option<&str>) -> Result<OsMesaContextBundle, String> {
         OSMESA_STENCIL_BITS,
         8,
         OSMESA_PROFILE,
-        OSMESA_CORE_PROFILE,
+        profile,
         OSMESA_CONTEXT_MAJOR_VERSION,
         3,
         OSMESA_CONTEXT_MINOR_VERSION,
-        3,
+        minor,
         0,
     ];
     // SAFETY: the attribute list is zero-terminated; no share context.
     let context = unsafe { create_attribs(attributes.as_ptr(), std::ptr::null_mut()) };
     if context.is_null() {
-        return Err(format!(
-            "{name}: OSMesaCreateContextAttribs refused a GL 3.3 core context"
-        ));
+        return Err(format!("{name}: OSMesaCreateContextAttribs refused {what}"));
     }
     let mut buffer = vec![0u8; BUFFER_SIDE * BUFFER_SIDE * 4];
     // SAFETY: the buffer holds BUFFER_SIDE² RGBA8 pixels; the holder below keeps it alive.
@@ -137,6 +155,7 @@ pub fn create(library: Option<&str>) -> Result<OsMesaContextBundle, String> {
         context,
         make_current,
         current,
+        get_proc,
         destroy,
         _buffer: buffer,
         _library: library,
@@ -145,7 +164,7 @@ pub fn create(library: Option<&str>) -> Result<OsMesaContextBundle, String> {
         return Err(format!("{name}: OSMesaMakeCurrent failed"));
     }
     // SAFETY: the context is current; OSMesaGetProcAddress takes a NUL-terminated name.
-    let gl = unsafe { glow::Context::from_loader_function_cstr(|n: &CStr| get_proc(n.as_ptr())) };
+    let gl = unsafe { glow::Context::from_loader_function_cstr(|n: &CStr| holder.proc_address(n)) };
     Ok(OsMesaContextBundle {
         holder,
         gl,

@@ -1,5 +1,10 @@
 //! GLSL programs: compile the files under `shaders/` with per-variant `#define`s, link, and look
 //! uniforms up by name once.
+//!
+//! The sources are GLSL 3.30 core written to also be GLSL ES 3.00: on a desktop context they get
+//! `#version 330 core`, on an ES context `#version 300 es` with precision statements. Where a
+//! stage needs what only one has (gl_ClipDistance: desktop only), the header defines
+//! `HAS_CLIP_DISTANCE` and the source is guarded by it.
 
 use glow::HasContext;
 use std::collections::HashMap;
@@ -41,9 +46,30 @@ pub mod sources {
     pub const DEBUG_VOLUME_FRAG: &str = include_str!("../../shaders/debug_volume.frag");
 }
 
+/// The header of every stage on a desktop context.
+const DESKTOP_HEADER: &str = "#version 330 core\n#define HAS_CLIP_DISTANCE\n";
+
+/// The header of every stage on an ES context: ES has no default float precision in fragment
+/// shaders and none at all for shadow samplers; lowp is the default of the others. highp
+/// everywhere keeps the arithmetic the desktop's 32-bit arithmetic.
+const ES_HEADER: &str = "#version 300 es
+precision highp float;
+precision highp int;
+precision highp sampler2D;
+precision highp sampler2DShadow;
+precision highp samplerCube;
+precision highp samplerCubeShadow;
+";
+
+/// Whether shaders on `gl` have gl_ClipDistance (and GL the CLIP_DISTANCEi switches): desktop
+/// GL 3.0 and later do, GLSL ES 3.00 does not.
+pub fn has_clip_distances(gl: &glow::Context) -> bool {
+    !gl.version().is_embedded
+}
+
 /// `#version`, the variant's defines, the shared helpers, then the stage's source.
-fn assemble(defines: &[&str], source: &str) -> String {
-    let mut s = String::from("#version 330 core\n");
+fn assemble(embedded: bool, defines: &[&str], source: &str) -> String {
+    let mut s = String::from(if embedded { ES_HEADER } else { DESKTOP_HEADER });
     for d in defines {
         s.push_str("#define ");
         s.push_str(d);
@@ -87,9 +113,15 @@ impl Program {
         fragment: Option<&str>,
         defines: &[&str],
     ) -> Result<Program, ProgramError> {
-        let vs = compile(gl, name, glow::VERTEX_SHADER, &assemble(defines, vertex))?;
+        let es = gl.version().is_embedded;
+        let vs = compile(
+            gl,
+            name,
+            glow::VERTEX_SHADER,
+            &assemble(es, defines, vertex),
+        )?;
         let fs = match fragment {
-            Some(f) => match compile(gl, name, glow::FRAGMENT_SHADER, &assemble(defines, f)) {
+            Some(f) => match compile(gl, name, glow::FRAGMENT_SHADER, &assemble(es, defines, f)) {
                 Ok(s) => Some(s),
                 Err(e) => {
                     // SAFETY: deleting the shader compiled above.

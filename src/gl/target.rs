@@ -179,7 +179,35 @@ pub fn read_pixels<T: Copy + Default>(
 
 /// [`read_pixels`] in GL's row order (bottom row first), for readers that work in window
 /// coordinates.
+///
+/// ES 3.0 guarantees only RGBA reads of colour buffers (RGBA/UNSIGNED_BYTE for fixed point,
+/// RGBA/FLOAT for float buffers): there RED and RG reads are made as RGBA and the channels
+/// asked for are kept.
 pub fn read_pixels_bottom_up<T: Copy + Default>(
+    gl: &glow::Context,
+    fbo: Option<glow::Framebuffer>,
+    buffer: Option<u32>,
+    size: (u32, u32),
+    (format, ty): (u32, u32),
+    per_pixel: usize,
+) -> Vec<T> {
+    let channels = match format {
+        glow::RED => 1,
+        glow::RG => 2,
+        _ => 0,
+    };
+    if channels == 0 || !gl.version().is_embedded {
+        return read_as_asked(gl, fbo, buffer, size, (format, ty), per_pixel);
+    }
+    // Values of T per channel, then per RGBA pixel.
+    let per_channel = per_pixel / channels;
+    let rgba: Vec<T> = read_as_asked(gl, fbo, buffer, size, (glow::RGBA, ty), 4 * per_channel);
+    rgba.chunks_exact(4 * per_channel)
+        .flat_map(|p| p[..per_pixel].iter().copied())
+        .collect()
+}
+
+fn read_as_asked<T: Copy + Default>(
     gl: &glow::Context,
     fbo: Option<glow::Framebuffer>,
     buffer: Option<u32>,

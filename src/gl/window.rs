@@ -40,6 +40,11 @@ impl Drop for WindowGl {
 }
 
 impl WindowGl {
+    /// The address of GL function `name` (for entry points glow lacks).
+    pub fn proc_address(&self, name: &CStr) -> *const std::ffi::c_void {
+        self.context.display().get_proc_address(name)
+    }
+
     /// Shows the back buffer.
     pub fn swap(&self) -> Result<(), String> {
         self.surface

@@ -9,8 +9,10 @@ use crate::options::{
 use serde::Serialize;
 
 /// The features `gl.disable` may name (those a fallback exists for).
-pub const FEATURES: [&str; 7] = [
+pub const FEATURES: [&str; 9] = [
     "render_to_depth_texture",
+    "depth_copy",
+    "depth_read",
     "float_depth",
     "clip_distances",
     "depth_clamp",
@@ -64,13 +66,28 @@ pub fn resolve(options: &Options, has: impl Fn(&str) -> bool) -> (Options, Vec<F
             });
         }
     };
-    if !has("render_to_depth_texture") && o.shadow_map.depth_source == DepthSource::Fbo {
+    if !has("render_to_depth_texture")
+        && has("depth_copy")
+        && o.shadow_map.depth_source == DepthSource::Fbo
+    {
         fall(
             "render_to_depth_texture",
             "shadow_map.depth_source",
             &mut o,
             "copy",
         );
+    }
+    // ES 3.0 cannot copy depth (glCopyTexSubImage2D takes colour only): draw into the map.
+    // Where neither works nothing is replaced, and the frame's GL error says so.
+    if !has("depth_copy")
+        && has("render_to_depth_texture")
+        && o.shadow_map.depth_source == DepthSource::Copy
+    {
+        fall("depth_copy", "shadow_map.depth_source", &mut o, "fbo");
+    }
+    // ES 3.0 reads no depth: the planner's depth comes reduced by a shader, read as colour.
+    if !has("depth_read") && !o.plan.reduce_depth {
+        fall("depth_read", "plan.reduce_depth", &mut o, "true");
     }
     if !has("float_depth") && o.shadow_map.depth_bits == DepthBits::D32f {
         fall("float_depth", "shadow_map.depth_bits", &mut o, "24");
@@ -144,6 +161,19 @@ mod tests {
         let (o, keys) = options_of("render_to_depth_texture");
         assert_eq!(o.shadow_map.depth_source, DepthSource::Copy);
         assert_eq!(keys, ["shadow_map.depth_source"]);
+        let mut copy = asked.clone();
+        copy.set("shadow_map.depth_source", "copy").unwrap();
+        let (o, taken) = resolve(&copy, without("depth_copy"));
+        assert_eq!(o.shadow_map.depth_source, DepthSource::Fbo);
+        assert_eq!(taken.len(), 1);
+        // Neither way to fill a map: nothing to fall back to.
+        let neither = |f: &str| f != "depth_copy" && f != "render_to_depth_texture";
+        assert_eq!(resolve(&copy, neither).1, vec![]);
+        let mut whole = asked.clone();
+        whole.set("plan.reduce_depth", "false").unwrap();
+        let (o, taken) = resolve(&whole, without("depth_read"));
+        assert!(o.plan.reduce_depth);
+        assert_eq!(taken.len(), 1);
         let (o, keys) = options_of("float_depth");
         assert_eq!(o.shadow_map.depth_bits, DepthBits::D24);
         assert_eq!(keys, ["shadow_map.depth_bits"]);

@@ -190,15 +190,20 @@ impl Measured {
 
 impl Measurer {
     pub fn new(scene: Scene, options: &Options) -> Measurer {
-        Self::on(gl_on(BackendChoice::Egl, options), scene)
+        Measurer::on(BackendChoice::Egl, scene, options)
+    }
+
+    /// A measurer whose frames render on `backend`.
+    pub fn on(backend: BackendChoice, scene: Scene, options: &Options) -> Measurer {
+        Self::with_gl(gl_on(backend, options), scene)
     }
 
     /// A measurer on a compatibility-profile context (both pipelines).
     pub fn legacy(backend: BackendChoice, scene: Scene, options: &Options) -> Measurer {
-        Self::on(gl_legacy(backend, options), scene)
+        Self::with_gl(gl_legacy(backend, options), scene)
     }
 
-    fn on((ctx, mut renderer): (GlContext, Renderer), scene: Scene) -> Measurer {
+    fn with_gl((ctx, mut renderer): (GlContext, Renderer), scene: Scene) -> Measurer {
         renderer.load_scene(&scene).unwrap();
         let reference = shadowlab::truth::Reference::build(&scene);
         Measurer {
@@ -207,6 +212,10 @@ impl Measurer {
             renderer,
             exact: shadowlab::truth::ExactMasks::with_reference(reference),
         }
+    }
+
+    pub fn context(&self) -> &shadowlab::gl::GlContext {
+        &self.ctx
     }
 
     pub fn renderer(&mut self) -> &mut shadowlab::gl::Renderer {

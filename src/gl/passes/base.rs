@@ -14,7 +14,7 @@ pub fn draw(ctx: &PassContext, program: &Program) {
     unsafe {
         gl.stencil_mask(0xff);
         gl.clear_color(0.0, 0.0, 0.0, 1.0);
-        gl.clear_depth_f64(1.0);
+        gl.clear_depth(1.0);
         gl.clear_stencil(0);
         gl.clear(glow::COLOR_BUFFER_BIT | glow::DEPTH_BUFFER_BIT | glow::STENCIL_BUFFER_BIT);
     }

@@ -12,7 +12,7 @@ pub fn draw(ctx: &PassContext, program: &Program) {
     DrawState::OPAQUE.apply(gl);
     unsafe {
         gl.clear_color(0.0, 0.0, 0.0, 0.0);
-        gl.clear_depth_f64(1.0);
+        gl.clear_depth(1.0);
         gl.clear(glow::COLOR_BUFFER_BIT | glow::DEPTH_BUFFER_BIT);
     }
     program.bind(gl);

@@ -4,7 +4,7 @@
 use super::shadow_map::offset_for;
 use super::state::DrawState;
 use super::{PassContext, draw_items};
-use crate::gl::program::Program;
+use crate::gl::program::{Program, has_clip_distances};
 use crate::options::{OffsetPass, Outside};
 use crate::plan::LightPlan;
 use crate::scene::{LightKind, light::SPOT_INNER_FRACTION};
@@ -75,8 +75,11 @@ fn bind_light(ctx: &PassContext, program: &Program, lp: &LightPlan, shadow: &Lit
             }
             _ => gl.disable(glow::POLYGON_OFFSET_FILL),
         }
-        for i in 0..4 {
-            gl.disable(glow::CLIP_DISTANCE0 + i);
+        // ES has no CLIP_DISTANCEi switches (GLSL ES 3.00 has no gl_ClipDistance).
+        if has_clip_distances(gl) {
+            for i in 0..4 {
+                gl.disable(glow::CLIP_DISTANCE0 + i);
+            }
         }
     }
     if let LitShadow::Faces(maps) = shadow {
@@ -159,8 +162,11 @@ pub fn finish(gl: &glow::Context) {
         gl.disable(glow::STENCIL_TEST);
         gl.stencil_mask(0xff);
         gl.disable(glow::POLYGON_OFFSET_FILL);
-        for i in 0..4 {
-            gl.disable(glow::CLIP_DISTANCE0 + i);
+        // ES has no CLIP_DISTANCEi switches (GLSL ES 3.00 has no gl_ClipDistance).
+        if has_clip_distances(gl) {
+            for i in 0..4 {
+                gl.disable(glow::CLIP_DISTANCE0 + i);
+            }
         }
     }
 }

@@ -93,14 +93,15 @@ pub fn begin(ctx: &PassContext, view: &MapView, target: &DepthTarget) {
                     Some(*texture),
                     0,
                 );
-                gl.draw_buffer(glow::NONE);
+                // glDrawBuffers: ES 3.0 has no glDrawBuffer.
+                gl.draw_buffers(&[glow::NONE]);
                 gl.read_buffer(glow::NONE);
             }
         }
         gl.viewport(0, 0, size as i32, size as i32);
         gl.color_mask(false, false, false, false);
         gl.depth_mask(true);
-        gl.clear_depth_f64(1.0);
+        gl.clear_depth(1.0);
         gl.clear(glow::DEPTH_BUFFER_BIT);
         gl.enable(glow::DEPTH_TEST);
         gl.depth_func(glow::LESS);

@@ -8,7 +8,7 @@
 
 use super::PassContext;
 use super::state::DrawState;
-use crate::gl::program::Program;
+use crate::gl::program::{Program, has_clip_distances};
 use crate::gl::volumes::LightVolumes;
 use crate::options::{StencilPasses, StencilWrap, VolumeProjection};
 use crate::plan::depth_bounds::MAX_PLANES;
@@ -96,9 +96,11 @@ pub fn draw(
         if o.projection == VolumeProjection::DepthClamp {
             gl.enable(glow::DEPTH_CLAMP);
         }
-        // Each draw's depth clip planes (zero where it has none).
-        for i in 0..MAX_PLANES as u32 {
-            gl.enable(glow::CLIP_DISTANCE0 + i);
+        // Each draw's depth clip planes (zero where it has none); none on ES.
+        if has_clip_distances(gl) {
+            for i in 0..MAX_PLANES as u32 {
+                gl.enable(glow::CLIP_DISTANCE0 + i);
+            }
         }
     }
     program.bind(gl);
@@ -147,9 +149,14 @@ pub fn draw(
     unsafe {
         gl.stencil_op(glow::KEEP, glow::KEEP, glow::KEEP);
         gl.disable(glow::POLYGON_OFFSET_FILL);
-        gl.disable(glow::DEPTH_CLAMP);
-        for i in 0..MAX_PLANES as u32 {
-            gl.disable(glow::CLIP_DISTANCE0 + i);
+        // Only what was enabled: ES may lack both switches (an error there).
+        if o.projection == VolumeProjection::DepthClamp {
+            gl.disable(glow::DEPTH_CLAMP);
+        }
+        if has_clip_distances(gl) {
+            for i in 0..MAX_PLANES as u32 {
+                gl.disable(glow::CLIP_DISTANCE0 + i);
+            }
         }
         gl.color_mask(true, true, true, true);
     }
