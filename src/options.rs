@@ -617,6 +617,14 @@ define_options! {
         /// quarters and ninths, each lifted above every pixel; the draw keeps what lies under
         /// all of them (see `plan::depth_bounds`).
         depth_clip_planes: u32 = 4, in 1 ..= 4;
+        /// Restrict each shadow-volume part's stencil draw with `EXT_depth_bounds_test`
+        /// (glDepthBoundsEXT) to the window-depth range of the receivers its shadow reaches:
+        /// the test reads the depth already stored at the pixel, and a surface outside that
+        /// range is outside the part's volume (its counts cancel) or out of the light's range.
+        /// It replaces `depth_clip` (the emulation) for every part. Where the GL lacks the
+        /// extension, or `gl.disable=depth_bounds`, the fallback sets this false and the
+        /// frame lists it.
+        depth_bounds_test: bool = true;
         /// Keep the fitted clip planes for the next frame and use them while its depth buffer
         /// (as read back for the planner) is the same: a fit reads nothing else but its
         /// rectangle. A still camera over a still scene then fits nothing.
