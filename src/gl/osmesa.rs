@@ -146,6 +146,9 @@ pub fn create(library: Option<&str>) -> Result<OsMesaContextBundle, String> {
     }
     // SAFETY: the context is current; OSMesaGetProcAddress takes a NUL-terminated name.
     let gl = unsafe { glow::Context::from_loader_function_cstr(|n: &CStr| get_proc(n.as_ptr())) };
+    // glow lacks glDepthBoundsEXT: loaded while the loader is at hand.
+    // SAFETY: as above.
+    super::depth_bounds_ext::load_for_current(|n| unsafe { get_proc(n.as_ptr()) });
     Ok(OsMesaContextBundle {
         holder,
         gl,
