@@ -681,6 +681,12 @@ define_options! {
         /// the same directions (`fov_scale = 1`, not `outside = clip_planes`). Changes pixels:
         /// each face's depth range is the cube's, not its own.
         omni_cube: bool = true;
+        /// Shadow-map a spot light whose cone one frustum cannot cover (cutoff near or past
+        /// 90°: the paper's single map is capped at 179°) with an omni light's views (six
+        /// spots or a cube, as `shadow_map.omni` and `omni_cube` say); the lit pass's cone
+        /// test still bounds its light. Off (and in the paper's frame) one frustum is used,
+        /// and points behind the light's plane read as shadowed (ARB_shadow's q <= 0 rule).
+        wide_spot_omni: bool = true;
     }
 
     /// Lights and the unshadowed lighting model.
