@@ -634,6 +634,14 @@ define_options! {
         /// quarters and ninths, each lifted above every pixel; the draw keeps what lies under
         /// all of them (see `plan::depth_bounds`).
         depth_clip_planes: u32 = 4, in 1 ..= 4;
+        /// Restrict each shadow-volume part's stencil draw with `EXT_depth_bounds_test`
+        /// (glDepthBoundsEXT) to the window-depth range of the receivers its shadow reaches:
+        /// the test reads the depth already stored at the pixel, and a surface outside that
+        /// range is outside the part's volume (its counts cancel) or out of the light's range.
+        /// It replaces `depth_clip` (the emulation) for every part. Where the GL lacks the
+        /// extension, or `gl.disable=depth_bounds`, the fallback sets this false and the
+        /// frame lists it.
+        depth_bounds_test: bool = true;
         /// Keep the fitted clip planes for the next frame and use them while its depth buffer
         /// (as read back for the planner) is the same: a fit reads nothing else but its
         /// rectangle. A still camera over a still scene then fits nothing.
@@ -690,6 +698,12 @@ define_options! {
         /// the same directions (`fov_scale = 1`, not `outside = clip_planes`). Changes pixels:
         /// each face's depth range is the cube's, not its own.
         omni_cube: bool = true;
+        /// Shadow-map a spot light whose cone one frustum cannot cover (cutoff near or past
+        /// 90°: the paper's single map is capped at 179°) with an omni light's views (six
+        /// spots or a cube, as `shadow_map.omni` and `omni_cube` say); the lit pass's cone
+        /// test still bounds its light. Off (and in the paper's frame) one frustum is used,
+        /// and points behind the light's plane read as shadowed (ARB_shadow's q <= 0 rule).
+        wide_spot_omni: bool = true;
     }
 
     /// Lights and the unshadowed lighting model.

@@ -399,7 +399,8 @@ fn case07_behind_the_spot_outside_its_fov_and_cube_seams() {
     assert_eq!(six.light(1).receiver_mismatch, 0);
     assert_eq!(cube.light(1).receiver_mismatch, 0);
     assert!(rates(&six).total_excl_boundary < 0.02 && rates(&cube).total_excl_boundary < 0.02);
-    // Behind the spot light nothing is lit: the spot's receivers all lie in its cone.
+    // Behind a narrow spot (cutoff 40°) nothing is lit: the lit pass's cone test discards
+    // those points before any shadow lookup (the wide spot below reaches the lookup).
     let g = six.frame.gbuffer.as_ref().unwrap();
     let spot = &m.scene.lights[0];
     let behind = (0..g.position.len())
@@ -429,6 +430,77 @@ fn case07_behind_the_spot_outside_its_fov_and_cube_seams() {
     report(case, "SM narrow FOV range test", &range);
     assert!(narrow.total.false_shadow > range.total.false_shadow);
     assert!(sv.total_excl_boundary < 0.001);
+    behind_a_spot_wider_than_a_half_space(case);
+}
+
+/// Receiver pixels of light 0 behind its plane in the exact mask, and how many of them `r`'s
+/// mask gets wrong: (receivers, lit in the reference, wrong).
+fn behind_the_plane(scene: &Scene, r: &Measured) -> (usize, usize, usize) {
+    let g = r.frame.gbuffer.as_ref().unwrap();
+    let light = &scene.lights[0];
+    let exact = truth::reference_mask(&Reference::build(scene), g, light, 0, Tracing::Bvh);
+    let shadowlab::scene::LightKind::Spot { direction, .. } = light.kind else {
+        panic!("light 0 is a spot");
+    };
+    let (mut receivers, mut lit, mut wrong) = (0, 0, 0);
+    for (i, p) in g.position.iter().enumerate() {
+        let truth = exact.values[i];
+        let behind = (Vec3::from_array(*p) - light.position).dot(direction) < 0.0;
+        if !behind || truth == MaskValue::NotReceiver as u8 {
+            continue;
+        }
+        receivers += 1;
+        lit += (truth == MaskValue::Lit as u8) as usize;
+        wrong += (r.mask(0).values[i] != truth) as usize;
+    }
+    (receivers, lit, wrong)
+}
+
+/// A spot of cutoff 135°: points behind its plane are in its cone and lit, so the shadow map's
+/// "behind the light" branch (q <= 0, ARB_shadow: shadowed) runs for them. The paper's one
+/// frustum (capped at 179°) shadows every one of them; the planner covers such a spot with an
+/// omni light's views (`plan.wide_spot_omni`) and is right there.
+fn behind_a_spot_wider_than_a_half_space(case: &str) {
+    let scene = hard("behind_wide_spot");
+    check_cpu(case, &scene);
+    let mut m = Measurer::new(scene.clone(), &options_with(&[SM]));
+    let mut paper_options = options_with(&[]);
+    shadowlab::presets::Preset::Paper
+        .apply(&mut paper_options)
+        .unwrap();
+    paper_options.set("technique", "shadow_map").unwrap();
+    let paper = m.measure(&paper_options);
+    let one_map = m.measure(&options_with(&[SM, "plan.wide_spot_omni=false"]));
+    let cube = m.measure(&options_with(&[SM]));
+    let six = m.measure(&options_with(&[SM, "plan.omni_cube=false"]));
+    let sv = m.measure(&options_with(&[SV]));
+    let wrong_of = |label: &str, r: &Measured| {
+        let x = report(case, label, r);
+        let (receivers, lit, wrong) = behind_the_plane(&scene, r);
+        println!(
+            "{case}: {label}: behind the wide spot's plane {receivers} receivers, {lit} lit in the reference, {wrong} wrong ({})",
+            pct(wrong as f64 / receivers.max(1) as f64)
+        );
+        (x, receivers, lit, wrong)
+    };
+    let (paper_x, receivers, lit, paper_wrong) = wrong_of("wide spot, SM one map (paper)", &paper);
+    let (_, _, _, one_wrong) = wrong_of("wide spot, SM one map, planner", &one_map);
+    let (cube_x, _, _, cube_wrong) = wrong_of("wide spot, SM cube (default)", &cube);
+    let (six_x, _, _, six_wrong) = wrong_of("wide spot, SM six spots", &six);
+    let (sv_x, _, _, sv_wrong) = wrong_of("wide spot, SV", &sv);
+    // The branch is reached: thousands of lit receivers lie behind the plane.
+    assert!(receivers > 5000 && lit > receivers / 2, "{receivers} {lit}");
+    // The paper's q <= 0 rule shadows every one of them, planner or not.
+    assert!(
+        paper_wrong >= lit && one_wrong >= lit,
+        "{paper_wrong} {one_wrong} of {lit}"
+    );
+    assert!(paper_x.false_shadow > 0.2, "{}", paper_x.false_shadow);
+    // Omni views light them: wrong only at shadow edges, like the volumes.
+    for (wrong, x) in [(cube_wrong, cube_x), (six_wrong, six_x), (sv_wrong, sv_x)] {
+        assert!(wrong < receivers / 100, "{wrong} of {receivers}");
+        assert!(x.total_excl_boundary < 0.005, "{}", x.total_excl_boundary);
+    }
 }
 
 #[test]

@@ -360,16 +360,18 @@ pub fn probe(gl: &glow::Context, fb_depth_stencil: (i32, i32)) -> Caps {
         },
         "infinite far-plane projection instead of depth clamping",
     );
-    let depth_bounds = has_ext("GL_EXT_depth_bounds_test");
+    // The extension string and glDepthBoundsEXT loaded (glow has no entry point for it).
+    let entry = super::depth_bounds_ext::current().is_some();
+    let depth_bounds = has_ext("GL_EXT_depth_bounds_test") && entry;
     add(
         "depth_bounds",
         depth_bounds,
-        if depth_bounds {
-            "GL_EXT_depth_bounds_test".into()
-        } else {
-            "GL_EXT_depth_bounds_test missing".into()
+        match (has_ext("GL_EXT_depth_bounds_test"), entry) {
+            (true, true) => "GL_EXT_depth_bounds_test".into(),
+            (true, false) => "GL_EXT_depth_bounds_test listed, glDepthBoundsEXT not loaded".into(),
+            _ => "GL_EXT_depth_bounds_test missing".into(),
         },
-        "scissor rectangles only",
+        "clip planes behind the depth buffer per volume part (plan.depth_clip) and scissors",
     );
     let (timer, timer_detail) = if es {
         // Same GL_TIME_ELAPSED(_EXT) value and entry points on ES with the extension.

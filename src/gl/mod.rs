@@ -3,6 +3,7 @@
 pub mod caps;
 pub mod context;
 pub mod debug;
+pub mod depth_bounds_ext;
 pub mod depth_reduce;
 pub mod egl;
 pub mod fixed;

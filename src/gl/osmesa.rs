@@ -165,6 +165,8 @@ pub fn create(library: Option<&str>, compatibility: bool) -> Result<OsMesaContex
     }
     // SAFETY: the context is current; OSMesaGetProcAddress takes a NUL-terminated name.
     let gl = unsafe { glow::Context::from_loader_function_cstr(|n: &CStr| holder.proc_address(n)) };
+    // glow lacks glDepthBoundsEXT: loaded while the loader is at hand.
+    super::depth_bounds_ext::load_for_current(|n| holder.proc_address(n));
     Ok(OsMesaContextBundle {
         holder,
         gl,

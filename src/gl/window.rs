@@ -122,6 +122,8 @@ pub fn open_window_gl(
     let gl = unsafe {
         glow::Context::from_loader_function_cstr(|name: &CStr| display.get_proc_address(name))
     };
+    // glow lacks glDepthBoundsEXT: loaded while the loader is at hand.
+    super::depth_bounds_ext::load_for_current(|name| display.get_proc_address(name));
     Ok((
         WindowGl {
             surface,

@@ -9,7 +9,7 @@ use crate::options::{
     CountingMode, OmniMode, Options, Outside, ShadowMapOptions, StencilPasses, Technique,
     VolumeProjection,
 };
-use crate::scene::{Camera, Light, Scene, SurfaceOwner};
+use crate::scene::{Camera, Light, LightKind, Scene, SurfaceOwner};
 use crate::shadow::views::{ViewKind, shadow_views};
 use crate::shadow::volume::{self, CasterGroup, CasterGroups, Counting, PieceRef};
 use glam::{Mat4, Vec3};
@@ -179,6 +179,16 @@ fn visibility(
         }
     }
     (visible, leaves)
+}
+
+/// Whether a spot's cone is wider than any one frustum `shadow_views` can give it (2 × cutoff,
+/// capped at 179°): a cutoff near or past 90° leaves points of the cone outside the map, and
+/// those behind the light's plane at q <= 0, which ARB_shadow reads as shadowed.
+pub fn spot_exceeds_frustum(light: &Light) -> bool {
+    match light.kind {
+        LightKind::Spot { cutoff_deg, .. } => 2.0 * cutoff_deg > 179.0,
+        LightKind::Omni => false,
+    }
 }
 
 /// The shadow-map options the planner draws with: under `plan.omni_cube`, where six spots and
@@ -437,7 +447,19 @@ impl FrameFacts<'_> {
         let l = &self.scene.lights[plan.light];
         let p = &self.options.plan;
         let on = self.on();
-        plan.views = shadow_views(l, &self.caster_bounds, &self.map_options);
+        // A spot wider than one frustum covers gets an omni light's views; the lit pass's cone
+        // test still bounds its light (`plan.wide_spot_omni`).
+        let as_omni;
+        let view_light = if on && p.wide_spot_omni && spot_exceeds_frustum(l) {
+            as_omni = Light {
+                kind: LightKind::Omni,
+                ..l.clone()
+            };
+            &as_omni
+        } else {
+            l
+        };
+        plan.views = shadow_views(view_light, &self.caster_bounds, &self.map_options);
         let light_key = hash_of((
             &self.map_options_text,
             plan.order,

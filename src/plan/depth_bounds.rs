@@ -9,10 +9,17 @@
 //! rectangle; a tilted plane follows it. For a planar surface window depth is an affine function
 //! of the screen position, so planes fitted to it can lie close to it everywhere, and the least
 //! of several planes follows a concave depth image (the walls of a room seen from inside).
+//!
+//! Where the GL has `EXT_depth_bounds_test` the planner uses it instead ([`window_depth_range`]):
+//! that test reads the depth already stored at the pixel, not the volume fragment's, so its
+//! bound is the window-depth range of the receivers a part's shadow can reach. A pixel whose
+//! stored depth lies outside shows a surface outside every such receiver: the part's closed
+//! volume does not hold it, its counts there cancel, so dropping all of them changes nothing.
 
 use super::CameraSetup;
 use super::occlusion::{DEPTH_MARGIN, DepthBlock, DepthPyramid};
 use super::scissor::Scissor;
+use glam::{Mat4, Vec3};
 
 /// Clip planes one draw may use (gl_ClipDistance[0..]): GL 3.3 guarantees eight.
 pub const MAX_PLANES: usize = 4;
@@ -286,6 +293,61 @@ impl DepthBound {
     }
 }
 
+/// A range [zmin, zmax] of window depth for `glDepthBoundsEXT`, compared with the depth
+/// stored at each pixel; `zmin > zmax` is the empty range (no stored depth lies in it).
+pub type DepthRange = [f32; 2];
+
+/// The empty range: the part can change no count that is read.
+pub const EMPTY_RANGE: DepthRange = [1.0, 0.0];
+
+/// Window depth (0 near .. 1 far) of a point at eye depth `d > 0` (distance in front of the
+/// eye along the view axis) under `projection`, a perspective whose clip z and w depend on the
+/// eye z alone. Increasing in `d`.
+fn window_depth(projection: &Mat4, d: f64) -> f64 {
+    let z = -(projection.z_axis.z as f64) * d + projection.w_axis.z as f64;
+    let w = -(projection.z_axis.w as f64) * d + projection.w_axis.w as f64;
+    (0.5 * z / w + 0.5).clamp(0.0, 1.0)
+}
+
+/// The window-depth range of every point in the convex hull of `points` (world space), padded
+/// by the depth rounding margin: a surface point in that hull is stored at a depth within it.
+/// Window depth grows with eye depth, which is affine in the position, so the hull's extremes
+/// are at its points; a hull reaching the eye's plane starts at 0. [`EMPTY_RANGE`] when every
+/// point is behind the eye (nothing there is seen) or there are none.
+pub fn window_depth_range(
+    view: &Mat4,
+    projection: &Mat4,
+    points: impl IntoIterator<Item = Vec3>,
+) -> DepthRange {
+    let (lo, hi) = points
+        .into_iter()
+        .map(|p| -(view.transform_point3(p).z as f64))
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), d| {
+            (lo.min(d), hi.max(d))
+        });
+    // No points (hi is -inf) or every one behind the eye.
+    if hi <= 0.0 {
+        return EMPTY_RANGE;
+    }
+    let zmin = if lo > 0.0 {
+        window_depth(projection, lo)
+    } else {
+        0.0
+    };
+    let zmax = window_depth(projection, hi);
+    let m = DEPTH_MARGIN as f64;
+    [(zmin - m).max(0.0) as f32, (zmax + m).min(1.0) as f32]
+}
+
+/// The smallest range holding both.
+pub fn range_union(a: DepthRange, b: DepthRange) -> DepthRange {
+    match (a[0] <= a[1], b[0] <= b[1]) {
+        (false, _) => b,
+        (_, false) => a,
+        _ => [a[0].min(b[0]), a[1].max(b[1])],
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -358,6 +420,72 @@ mod tests {
             }
         }
         (least, sum / n as f32)
+    }
+
+    #[test]
+    fn window_depth_ranges_match_hand_computed_depths() {
+        // The infinite projection with near plane n: window depth 1 - n/d at eye depth d.
+        let cam = camera();
+        let n = Camera::looking_at(Vec3::ZERO, Vec3::X).near;
+        // Eye at the origin looking down +x: eye depth is x.
+        let (view, proj) = (&cam.view, &cam.projection);
+        let m = DEPTH_MARGIN;
+        let r = window_depth_range(
+            view,
+            proj,
+            [Vec3::new(8.0 * n, 1.0, 0.0), Vec3::new(2.0 * n, -3.0, 2.0)],
+        );
+        // d = 2n: 1 - 1/2; d = 8n: 1 - 1/8.
+        assert!((r[0] - (0.5 - m)).abs() < 1e-6, "{r:?}");
+        assert!((r[1] - (0.875 + m)).abs() < 1e-6, "{r:?}");
+        // A box around the eye starts at the near end; one behind it is empty.
+        let around = window_depth_range(
+            view,
+            proj,
+            [Vec3::new(-1.0, 0.0, 0.0), Vec3::new(4.0 * n, 0.0, 0.0)],
+        );
+        assert_eq!(around[0], 0.0);
+        assert!((around[1] - (0.75 + m)).abs() < 1e-6, "{around:?}");
+        let behind = window_depth_range(view, proj, [Vec3::new(-5.0, 1.0, 1.0)]);
+        assert_eq!(behind, EMPTY_RANGE);
+        assert_eq!(window_depth_range(view, proj, []), EMPTY_RANGE);
+        // Unions: empty ranges drop out.
+        assert_eq!(range_union(EMPTY_RANGE, [0.2, 0.3]), [0.2, 0.3]);
+        assert_eq!(range_union([0.5, 0.6], [0.2, 0.3]), [0.2, 0.6]);
+    }
+
+    #[test]
+    fn every_point_of_a_box_lies_within_its_range() {
+        // Against the projection itself: points of the box taken to window depth.
+        let cam = camera();
+        let mut seed = 3u32;
+        let mut next = move || {
+            seed = seed.wrapping_mul(1664525).wrapping_add(1013904223);
+            (seed >> 8) as f32 / (1u32 << 24) as f32
+        };
+        for _ in 0..50 {
+            let c = Vec3::new(
+                next() * 300.0 - 20.0,
+                next() * 100.0 - 50.0,
+                next() * 100.0 - 50.0,
+            );
+            let half = Vec3::new(next(), next(), next()) * 40.0;
+            let b = crate::geometry::Aabb {
+                min: c - half,
+                max: c + half,
+            };
+            let r = window_depth_range(&cam.view, &cam.projection, b.corners());
+            for _ in 0..40 {
+                let t = Vec3::new(next(), next(), next());
+                let p = b.min + (b.max - b.min) * t;
+                let clip = cam.view_proj * p.extend(1.0);
+                if clip.w <= 0.0 || clip.z < -clip.w {
+                    continue; // behind the eye or nearer than the near plane: never stored
+                }
+                let d = 0.5 * clip.z / clip.w + 0.5;
+                assert!(d >= r[0] && d <= r[1], "{d} outside {r:?} for {p} in {b:?}");
+            }
+        }
     }
 
     #[test]

@@ -9,7 +9,7 @@ use crate::options::{
 use serde::Serialize;
 
 /// The features `gl.disable` may name (those a fallback exists for).
-pub const FEATURES: [&str; 9] = [
+pub const FEATURES: [&str; 10] = [
     "render_to_depth_texture",
     "depth_copy",
     "depth_read",
@@ -19,6 +19,7 @@ pub const FEATURES: [&str; 9] = [
     "separate_stencil",
     "stencil_wrap",
     "timer_query",
+    "depth_bounds",
 ];
 
 /// One option replaced because the GL lacks a feature.
@@ -124,6 +125,11 @@ pub fn resolve(options: &Options, has: impl Fn(&str) -> bool) -> (Options, Vec<F
             fall(feature, "plan.one_pass_stencil", &mut o, "false");
         }
     }
+    // The planner's depth bounds test (it alone uses it) gives way to its emulation,
+    // `plan.depth_clip`'s clip planes.
+    if !has("depth_bounds") && o.plan.enabled && o.plan.depth_bounds_test {
+        fall("depth_bounds", "plan.depth_bounds_test", &mut o, "false");
+    }
     if !has("stencil_wrap") && o.shadow_volume.wrap == StencilWrap::Wrap {
         fall("stencil_wrap", "shadow_volume.wrap", &mut o, "saturate");
     }
@@ -183,6 +189,13 @@ mod tests {
             (Outside::Range, false)
         );
         assert_eq!(keys, ["shadow_map.outside", "plan.depth_clip"]);
+        let (o, keys) = options_of("depth_bounds");
+        assert!(!o.plan.depth_bounds_test && o.plan.depth_clip);
+        assert_eq!(keys, ["plan.depth_bounds_test"]);
+        // Without the planner nothing uses it: nothing to replace.
+        let mut paper = asked.clone();
+        paper.set("plan.enabled", "false").unwrap();
+        assert_eq!(resolve(&paper, without("depth_bounds")).1, vec![]);
         let (o, _) = options_of("depth_clamp");
         assert_eq!(o.shadow_volume.projection, VolumeProjection::Infinite);
         let (o, keys) = options_of("separate_stencil");

@@ -188,6 +188,7 @@ impl Planner {
             },
             scissor: p.enabled && p.piece_scissor,
             merge: p.enabled && p.merge_pieces,
+            depth_bounds: p.enabled && p.depth_bounds_test,
             cull_clipped: p.enabled && p.cull_clipped,
             reuse_fits: p.reuse_depth_fits,
             reuse_draws: p.enabled && p.reuse_volume_draws,

@@ -22,7 +22,9 @@
 use crate::geometry::Aabb;
 use crate::options::ShadowVolumeOptions;
 use crate::plan::clipped::{ClipTest, block_bounds};
-use crate::plan::depth_bounds::{DepthBound, MAX_PLANES};
+use crate::plan::depth_bounds::{
+    DepthBound, DepthRange, EMPTY_RANGE, MAX_PLANES, range_union, window_depth_range,
+};
 use crate::plan::merge::{KeptChunk, merged_spans};
 use crate::plan::occlusion::DepthPyramid;
 use crate::plan::scissor::{Scissor, points_scissor};
@@ -81,6 +83,14 @@ pub struct VolumeStats {
     /// Drawn depth-pass parts clipped at the farthest depth of their rectangle
     /// (`plan.depth_clip`).
     pub parts_depth_clipped: usize,
+    /// Drawn parts restricted by `EXT_depth_bounds_test` to the window-depth range of the
+    /// receivers their shadow reaches (`plan.depth_bounds_test`, where the GL has it).
+    pub parts_depth_bounded: usize,
+    /// The window-depth range of the receivers the drawn parts' shadows reach, all parts
+    /// together (what `EXT_depth_bounds_test` is given part by part); computed whenever the
+    /// receivers are known, so that its meaning can be checked where the test is missing.
+    /// None: a drawn part has none (receivers unknown, test off).
+    pub depth_range: Option<DepthRange>,
     /// Depth-pass parts whose clip planes were fitted before, for this rectangle and this
     /// depth buffer: by an earlier frame with the same depth (`plan.reuse_depth_fits`), or
     /// for another part or light of this frame.
@@ -130,16 +140,21 @@ pub struct PartRange {
     pub scissor: Option<Scissor>,
     /// A clip-space plane its stencil draw is clipped to (`gl_ClipDistance`; zero: none).
     pub depth_clip: [[f32; 4]; MAX_PLANES],
+    /// The window-depth range the depth already stored at a pixel must lie in for its draw
+    /// to change the pixel's count (`EXT_depth_bounds_test`; None: no test).
+    pub depth_bounds: Option<DepthRange>,
     /// The triangles the clip planes leave anything of, as (first, count) in the light's
     /// index buffer (`plan.cull_clipped`); None: all of them, straight from the vertices.
     pub elements: Option<(i32, i32)>,
 }
 
 impl PartRange {
-    /// False for a part whose rectangle is empty (its counts can change no receiver in view)
-    /// or whose every triangle the clip planes reject.
+    /// False for a part whose rectangle or depth range is empty (its counts can change no
+    /// receiver in view) or whose every triangle the clip planes reject.
     pub fn drawn(&self) -> bool {
-        self.scissor.is_none_or(|s| s.area() > 0) && self.elements.is_none_or(|(_, n)| n > 0)
+        self.scissor.is_none_or(|s| s.area() > 0)
+            && self.elements.is_none_or(|(_, n)| n > 0)
+            && self.depth_bounds.is_none_or(|[lo, hi]| lo <= hi)
     }
 }
 
@@ -156,6 +171,7 @@ pub struct VolumeDraw {
     pub indexed: bool,
     pub scissor: Option<Scissor>,
     pub depth_clip: [[f32; 4]; MAX_PLANES],
+    pub depth_bounds: Option<DepthRange>,
 }
 
 /// The clip-space planes beyond which a depth-pass part's fragments cannot change a count
@@ -181,7 +197,7 @@ struct DrawInputs {
     depth: u64,
     camera: CameraSetup,
     options: ShadowVolumeOptions,
-    choices: ([bool; 7], usize),
+    choices: ([bool; 8], usize),
     light: (glam::Vec3, f32),
     transforms: Vec<Mat4>,
 }
@@ -209,6 +225,7 @@ impl DrawInputs {
                     p.merge,
                     p.cull_clipped,
                     p.reuse_fits,
+                    p.depth_bounds,
                 ],
                 p.depth_clip,
             ),
@@ -247,6 +264,11 @@ pub struct PieceChoices<'a> {
     pub depth_clip: usize,
     /// `plan.merge_pieces`: neighbouring chunks kept alike are drawn as one piece.
     pub merge: bool,
+    /// `plan.depth_bounds_test` (where the GL has `EXT_depth_bounds_test`): each part's draw
+    /// is restricted to pixels whose stored depth lies in the window-depth range of the
+    /// receivers its shadow reaches. It replaces `depth_clip`, the emulation: each part gets
+    /// one or the other.
+    pub depth_bounds: bool,
     /// `plan.cull_clipped`: a depth-clipped part draws only the triangles its clip planes do
     /// not wholly reject.
     pub cull_clipped: bool,
@@ -314,6 +336,7 @@ fn draws_of(parts: &[PartRange]) -> Vec<VolumeDraw> {
                     && d.model == p.model
                     && d.scissor == p.scissor
                     && d.depth_clip == p.depth_clip
+                    && d.depth_bounds == p.depth_bounds
                     && d.indexed == indexed
                     && d.first + d.count == first =>
             {
@@ -327,6 +350,7 @@ fn draws_of(parts: &[PartRange]) -> Vec<VolumeDraw> {
                 indexed,
                 scissor: p.scissor,
                 depth_clip: p.depth_clip,
+                depth_bounds: p.depth_bounds,
             }),
         }
     }
@@ -347,6 +371,9 @@ struct Piece {
     near: Vec<u32>,
     /// Where its draw may change counts (`plan.piece_scissor`; None: the light's rectangle).
     rect: Option<Scissor>,
+    /// The window-depth range of the receiver points its counts can change
+    /// (`plan.depth_bounds_test`; None: not tested).
+    depth_range: Option<DepthRange>,
     /// A split part's triangles (None: those `id` names), and a hash of them for its key.
     subset: Option<volume::Component>,
     subset_key: u64,
@@ -417,6 +444,11 @@ fn merge(
                 .iter()
                 .filter_map(|m| m.rect)
                 .reduce(|a, b| a.union(&b));
+            let depth_range = members
+                .iter()
+                .map(|m| m.depth_range)
+                .reduce(|a, b| Some(range_union(a?, b?)))
+                .flatten();
             stats.chunks_merged += members.len();
             stats.merged_parts += 1;
             let m = members[0];
@@ -429,6 +461,7 @@ fn merge(
                 local_radius: m.local_radius,
                 near,
                 rect,
+                depth_range,
                 subset: None,
                 subset_key: 0,
             });
@@ -704,6 +737,15 @@ fn plan_pieces(
             .collect();
         let rect = (choices.scissor && culling)
             .then(|| piece_rect(lp, choices.camera, boxes, &near, &piece_shadow, &model));
+        // Also without the test, when the receivers are known: for the stats.
+        let depth_range = (choices.depth_bounds || culling).then(|| {
+            piece_depth_range(
+                choices.camera,
+                culling.then_some((boxes, &near[..])),
+                &piece_shadow,
+                &model,
+            )
+        });
         pieces.push(Piece {
             group: p.group,
             id,
@@ -713,6 +755,7 @@ fn plan_pieces(
             local_radius,
             near,
             rect,
+            depth_range,
             subset,
             subset_key,
         });
@@ -772,6 +815,35 @@ fn piece_rect(
         }
     }
     rect.map_or(Scissor::EMPTY, |r| r.intersect(&light_rect))
+}
+
+/// The window-depth range of the receiver points a piece's counts can change: those of its
+/// receiver boxes (`near`, the boxes in the group's space) inside its shadow, as for
+/// [`piece_rect`]; without receiver boxes (no caster culling), its shadow within the light's
+/// range, beyond which the lit pass adds nothing. `EXT_depth_bounds_test` compares the depth
+/// stored at a pixel with it: a surface outside that range is outside the piece's volume,
+/// where its counts cancel, or unlit.
+fn piece_depth_range(
+    camera: &CameraSetup,
+    receivers: Option<(&[Aabb], &[u32])>,
+    piece_shadow: &Aabb,
+    model: &Mat4,
+) -> DepthRange {
+    let world = |b: &Aabb| b.corners().map(|c| model.transform_point3(c));
+    let range = |b: &Aabb| {
+        if b.is_empty() {
+            EMPTY_RANGE
+        } else {
+            window_depth_range(&camera.view, &camera.projection, world(b))
+        }
+    };
+    match receivers {
+        Some((boxes, near)) => near
+            .iter()
+            .map(|&i| range(&boxes[i as usize].intersection(piece_shadow)))
+            .fold(EMPTY_RANGE, range_union),
+        None => range(piece_shadow),
+    }
 }
 
 impl LightVolumeDraws {
@@ -881,6 +953,7 @@ impl LightVolumeDraws {
         let mut layout = DefaultHasher::new();
         let mut drawn = 0usize;
         let mut indices = Vec::new();
+        let mut depth_range = Some(EMPTY_RANGE);
         for (p, key) in order {
             let cached = &self.meshes[&(p.group, p.id)];
             let mesh = &cached.mesh;
@@ -897,6 +970,7 @@ impl LightVolumeDraws {
                 caps: mesh.cap_vertices as i32,
                 scissor: p.rect,
                 depth_clip: part_depth_clip(p, lp, choices, fits, stats),
+                depth_bounds: p.depth_range.filter(|_| choices.depth_bounds),
                 elements: None,
             };
             let test = ClipTest::new(camera.view_proj * p.model, &range.depth_clip)
@@ -929,6 +1003,12 @@ impl LightVolumeDraws {
             if range.depth_clip != [[0.0; 4]; MAX_PLANES] {
                 stats.parts_depth_clipped += 1;
             }
+            if range.depth_bounds.is_some() {
+                stats.parts_depth_bounded += 1;
+            }
+            depth_range = depth_range
+                .zip(p.depth_range)
+                .map(|(a, b)| range_union(a, b));
             scissored += p.rect.map_or(1.0, |s| {
                 s.area() as f64 / Scissor::full(camera).area().max(1) as f64
             });
@@ -936,6 +1016,7 @@ impl LightVolumeDraws {
             stats.cap_triangles += mesh.cap_vertices / 3;
         }
         total.hash(&mut layout);
+        stats.depth_range = depth_range;
         stats.part_scissor_fraction = if drawn == 0 {
             0.0
         } else {
@@ -968,9 +1049,10 @@ fn part_depth_clip(
     fits: &mut HashMap<FitKey, [[f32; 4]; MAX_PLANES]>,
     stats: &mut VolumeStats,
 ) -> [[f32; 4]; MAX_PLANES] {
-    let depth = choices
-        .depth
-        .filter(|_| choices.depth_clip > 0 && p.counting == Counting::ZPass);
+    // The depth bounds test, where used, replaces the clip planes (its emulation).
+    let depth = choices.depth.filter(|_| {
+        choices.depth_clip > 0 && !choices.depth_bounds && p.counting == Counting::ZPass
+    });
     let Some(depth) = depth else {
         return [[0.0; 4]; MAX_PLANES];
     };

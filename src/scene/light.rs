@@ -7,7 +7,8 @@ use glam::{DVec3, Vec3};
 
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum LightKind {
-    /// A cone around `direction` (unit) with half-angle `cutoff_deg` (GL's spot cutoff, < 90).
+    /// A cone around `direction` (unit) with half-angle `cutoff_deg` (GL's spot cutoff is
+    /// below 90; up to 180 here: a cone wider than a half-space, see `plan.wide_spot_omni`).
     Spot { direction: Vec3, cutoff_deg: f32 },
     /// Lights every direction.
     Omni,

@@ -18,7 +18,7 @@
 //! kind = "spot"                   # or "omni"
 //! position = [0, 0, 100]
 //! target = [0, 0, 0]              # or direction = [0, 0, -1]
-//! cutoff = 40                     # spot half-angle, degrees
+//! cutoff = 40                     # spot half-angle, degrees (0..180)
 //! radius = 800                    # range
 //! color = [1, 1, 1]
 //! [[model]]
@@ -245,10 +245,13 @@ impl SceneFile {
                     }
                 };
                 let cutoff = l.cutoff.unwrap_or(45.0);
-                if !(dir.length_squared() > 0.0 && dir.is_finite() && cutoff > 0.0 && cutoff < 90.0)
+                if !(dir.length_squared() > 0.0
+                    && dir.is_finite()
+                    && cutoff > 0.0
+                    && cutoff < 180.0)
                 {
                     return Err(self.invalid(format!(
-                        "[[light]] {name}: the direction must be non-zero and the cutoff within (0, 90) degrees"
+                        "[[light]] {name}: the direction must be non-zero and the cutoff within (0, 180) degrees"
                     )));
                 }
                 LightKind::Spot {

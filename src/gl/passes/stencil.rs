@@ -5,9 +5,14 @@
 //! test passes, then back faces decrement; no caps. Two passes with culling (the paper's card), or
 //! one pass with glStencilOpSeparate. Colour and depth writes are off; the stencil is cleared
 //! first. Parts counted either way add up in the same buffer.
+//!
+//! Each draw is restricted as the plan says: clip planes behind the depth buffer
+//! (`gl_ClipDistance`, `plan.depth_clip`) or, where the GL has it, `EXT_depth_bounds_test` over
+//! the stored depth (`plan.depth_bounds_test`).
 
 use super::PassContext;
 use super::state::DrawState;
+use crate::gl::depth_bounds_ext::{self, DepthBoundsExt};
 use crate::gl::program::{Program, has_clip_distances};
 use crate::gl::volumes::LightVolumes;
 use crate::options::{StencilPasses, StencilWrap, VolumeProjection};
@@ -42,13 +47,26 @@ const DEPTH_CLIP_UNIFORMS: [&str; MAX_PLANES] = [
     "u_depth_clip[3]",
 ];
 
-fn draw_parts(gl: &glow::Context, program: &Program, v: &LightVolumes<'_>, counting: Counting) {
-    // SAFETY: the light's own vertex array; ranges lie inside its buffer.
+fn draw_parts(
+    gl: &glow::Context,
+    program: &Program,
+    v: &LightVolumes<'_>,
+    counting: Counting,
+    bounds: Option<DepthBoundsExt>,
+) {
+    // SAFETY: the light's own vertex array; ranges lie inside its buffer. The depth bounds
+    // entry point is given only where the GL has the extension.
     unsafe {
         gl.bind_vertex_array(Some(v.vao));
         for d in v.draws.iter().filter(|d| d.counting == counting) {
             if d.scissor.is_some() {
                 super::set_scissor(gl, d.scissor);
+            }
+            if let Some(ext) = bounds {
+                match d.depth_bounds {
+                    Some(range) => ext.enable(gl, range),
+                    None => ext.disable(gl),
+                }
             }
             program.set_mat4(gl, "u_model", &d.model);
             for (name, plane) in DEPTH_CLIP_UNIFORMS.iter().zip(&d.depth_clip) {
@@ -103,6 +121,14 @@ pub fn draw(
             }
         }
     }
+    // The plan asks for the depth bounds test only where the probe found the extension and
+    // its entry point (plan::fallback); counts are right without it, only slower.
+    let bounds = volumes
+        .draws
+        .iter()
+        .any(|d| d.depth_bounds.is_some())
+        .then(depth_bounds_ext::current)
+        .flatten();
     program.bind(gl);
     program.set_mat4(gl, "u_view_proj", &ctx.plan.camera.view_proj);
     let passes = ctx.plan.stencil;
@@ -130,7 +156,7 @@ pub fn draw(
                         });
                         let (sfail, dpfail, dppass) = face_op(counting, op);
                         gl.stencil_op(sfail, dpfail, dppass);
-                        draw_parts(gl, program, volumes, counting);
+                        draw_parts(gl, program, volumes, counting, bounds);
                     }
                 }
                 StencilPasses::Separate => {
@@ -139,7 +165,7 @@ pub fn draw(
                         let (sfail, dpfail, dppass) = face_op(counting, op);
                         gl.stencil_op_separate(face, sfail, dpfail, dppass);
                     }
-                    draw_parts(gl, program, volumes, counting);
+                    draw_parts(gl, program, volumes, counting, bounds);
                 }
             }
         }
@@ -147,6 +173,9 @@ pub fn draw(
     super::set_scissor(gl, light_scissor);
     // SAFETY: state reset for the lit pass, which sets what it needs.
     unsafe {
+        if let Some(ext) = bounds {
+            ext.disable(gl);
+        }
         gl.stencil_op(glow::KEEP, glow::KEEP, glow::KEEP);
         gl.disable(glow::POLYGON_OFFSET_FILL);
         // Only what was enabled: ES may lack both switches (an error there).
