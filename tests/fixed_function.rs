@@ -101,10 +101,19 @@ const CASES: [(&str, &[&str]); 7] = [
     ("SM paper: copy, hw compare, ALPHA, offset", &[]),
     ("SM INTENSITY", &["shadow_map.result=intensity"]),
     ("SM range (border)", &["shadow_map.outside=range"]),
-    ("SM fbo, 32f", &["shadow_map.depth_source=fbo", "shadow_map.depth_bits=32f"]),
+    (
+        "SM fbo, 32f",
+        &["shadow_map.depth_source=fbo", "shadow_map.depth_bits=32f"],
+    ),
     ("SM hw2x2", &["shadow_map.filter=hw2x2"]),
-    ("SV paper: two-pass depth-fail", &["technique=shadow_volume"]),
-    ("SV depth-pass", &["technique=shadow_volume", "shadow_volume.counting=zpass"]),
+    (
+        "SV paper: two-pass depth-fail",
+        &["technique=shadow_volume"],
+    ),
+    (
+        "SV depth-pass",
+        &["technique=shadow_volume", "shadow_volume.counting=zpass"],
+    ),
 ];
 
 fn sets_of(extra: &[&'static str]) -> Vec<&'static str> {
@@ -140,15 +149,27 @@ fn fixed_function_replaces_what_it_cannot_draw_and_says_so() {
     let options = options_with(&["gl.pipeline=fixed_function"]);
     let mut m = Measurer::legacy(BackendChoice::Egl, builtin::default_scene(), &options);
     let asked = with_pipeline(
-        &["technique=shadow_map", "shadow_map.filter=pcf3x3", "shadow_map.omni=cube"],
+        &[
+            "technique=shadow_map",
+            "shadow_map.filter=pcf3x3",
+            "shadow_map.omni=cube",
+        ],
         "fixed_function",
     );
     let frame = m.measure(&asked).frame;
     let replaced: Vec<_> = frame.fallbacks.iter().map(|f| f.option).collect();
     for option in ["shadow_map.filter", "shadow_map.omni", "plan.omni_cube"] {
-        assert!(replaced.contains(&option), "{option} not listed: {replaced:?}");
+        assert!(
+            replaced.contains(&option),
+            "{option} not listed: {replaced:?}"
+        );
     }
-    assert!(frame.fallbacks.iter().all(|f| f.feature == "fixed_function"));
+    assert!(
+        frame
+            .fallbacks
+            .iter()
+            .all(|f| f.feature == "fixed_function")
+    );
 }
 
 #[test]
@@ -193,7 +214,10 @@ fn fixed_function_clip_planes_lose_no_receiver_and_decide_as_the_shaders() {
         lost(&shaders),
         lost(&legacy)
     );
-    assert!(lost(&shaders) > 1000, "the anomaly is gone from the shader path?");
+    assert!(
+        lost(&shaders) > 1000,
+        "the anomaly is gone from the shader path?"
+    );
     assert_eq!(lost(&legacy), 0);
     let (mut both, mut differ) = (0, 0);
     for ma in &shaders.frame.masks {

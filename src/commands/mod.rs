@@ -9,8 +9,8 @@ pub mod reproduce;
 pub mod view;
 
 use anyhow::{Context, Result};
-use shadowlab::gl::{GlContext, Profile, Renderer, create_context};
 use shadowlab::gl::legacy::Legacy;
+use shadowlab::gl::{GlContext, Profile, Renderer, create_context};
 use shadowlab::options::{BackendChoice, OptionValue, Options, Pipeline};
 use shadowlab::presets::Preset;
 use shadowlab::scene::{Scene, builtin};

@@ -129,7 +129,10 @@ unsafe fn entry<F: Copy>(
         missing.push(name.to_string_lossy().into_owned());
         return None;
     }
-    debug_assert_eq!(std::mem::size_of::<F>(), std::mem::size_of::<*const c_void>());
+    debug_assert_eq!(
+        std::mem::size_of::<F>(),
+        std::mem::size_of::<*const c_void>()
+    );
     // SAFETY: a non-null address of the command whose type the caller names.
     Some(unsafe { std::mem::transmute_copy::<*const c_void, F>(&p) })
 }

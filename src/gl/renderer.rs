@@ -29,13 +29,13 @@ use crate::options::{
     StencilWrap, Technique, VolumeShading,
 };
 use crate::plan::auto::CostMemory;
-use crate::plan::{fallback, fixed_function};
 use crate::plan::occlusion::DepthPyramid;
 use crate::plan::pass::{PassId, Stage};
 use crate::plan::planner::{DepthNeed, Planner};
 use crate::plan::scissor::Scissor;
 use crate::plan::volume_draws::VolumeStats;
 use crate::plan::{LightPlan, Plan};
+use crate::plan::{fallback, fixed_function};
 use crate::scene::{Camera, Scene};
 use crate::shadow::views::ViewKind;
 use glow::HasContext;

@@ -52,70 +52,76 @@ pub fn draw(ctx: &PassContext, ff: &FixedFunction) {
     let items = ctx.gpu.draw_list(ctx.scene, |s| ctx.plan.visible[s]);
     let lighting = &ctx.options.lighting;
     let view = ctx.plan.camera.view;
-    ff.draw_items(ctx, &view, &items, |c| c, |item| {
-        let material = &ctx.scene.materials[item.material];
-        ff.material_alpha_test(gl, material.alpha_test);
-        let level = match item.owner {
-            SurfaceOwner::World => lighting.ambient,
-            SurfaceOwner::Model(_) => lighting.model_ambient,
-        };
-        let lightmap = item
-            .lightmap
-            .and_then(|lm| ctx.gpu.lightmaps.get(lm).copied());
-        let baked = match (item.baked, lightmap) {
-            _ if !lighting.baked => None,
-            (BakedLight::Lightmap, Some(lm)) => Some(Some(lm)),
-            (BakedLight::Vertex, _) => Some(None),
-            _ => None,
-        };
-        // SAFETY: fixed-function state; textures of our own.
-        unsafe {
-            // Unit 0's scale is only raised for vertex-lit items.
-            gl.active_texture(glow::TEXTURE0);
-            (l.tex_env_fv)(legacy::TEXTURE_ENV, legacy::RGB_SCALE, [1.0].as_ptr());
-            match baked {
-                // Lightmapped: texture × lightmap × 2^overbright on unit 1.
-                Some(Some(lm)) => {
-                    (l.disable_client_state)(legacy::COLOR_ARRAY);
-                    (l.color_4f)(1.0, 1.0, 1.0, 1.0);
-                    gl.active_texture(glow::TEXTURE1);
-                    gl.enable(glow::TEXTURE_2D);
-                    gl.bind_texture(glow::TEXTURE_2D, Some(lm));
-                    modulate_scaled(l, scale);
+    ff.draw_items(
+        ctx,
+        &view,
+        &items,
+        |c| c,
+        |item| {
+            let material = &ctx.scene.materials[item.material];
+            ff.material_alpha_test(gl, material.alpha_test);
+            let level = match item.owner {
+                SurfaceOwner::World => lighting.ambient,
+                SurfaceOwner::Model(_) => lighting.model_ambient,
+            };
+            let lightmap = item
+                .lightmap
+                .and_then(|lm| ctx.gpu.lightmaps.get(lm).copied());
+            let baked = match (item.baked, lightmap) {
+                _ if !lighting.baked => None,
+                (BakedLight::Lightmap, Some(lm)) => Some(Some(lm)),
+                (BakedLight::Vertex, _) => Some(None),
+                _ => None,
+            };
+            // SAFETY: fixed-function state; textures of our own.
+            unsafe {
+                // Unit 0's scale is only raised for vertex-lit items.
+                gl.active_texture(glow::TEXTURE0);
+                (l.tex_env_fv)(legacy::TEXTURE_ENV, legacy::RGB_SCALE, [1.0].as_ptr());
+                match baked {
+                    // Lightmapped: texture × lightmap × 2^overbright on unit 1.
+                    Some(Some(lm)) => {
+                        (l.disable_client_state)(legacy::COLOR_ARRAY);
+                        (l.color_4f)(1.0, 1.0, 1.0, 1.0);
+                        gl.active_texture(glow::TEXTURE1);
+                        gl.enable(glow::TEXTURE_2D);
+                        gl.bind_texture(glow::TEXTURE_2D, Some(lm));
+                        modulate_scaled(l, scale);
+                    }
+                    // Vertex-lit: texture × vertex colour × 2^overbright, on unit 0.
+                    Some(None) => {
+                        (l.enable_client_state)(legacy::COLOR_ARRAY);
+                        gl.active_texture(glow::TEXTURE1);
+                        gl.disable(glow::TEXTURE_2D);
+                        gl.active_texture(glow::TEXTURE0);
+                        l.env(legacy::TEXTURE_ENV_MODE, legacy::COMBINE);
+                        l.env(legacy::COMBINE_RGB, legacy::MODULATE);
+                        l.env(legacy::SOURCE0_RGB, legacy::TEXTURE);
+                        l.env(legacy::OPERAND0_RGB, legacy::SRC_COLOR);
+                        l.env(legacy::SOURCE1_RGB, legacy::PRIMARY_COLOR);
+                        l.env(legacy::OPERAND1_RGB, legacy::SRC_COLOR);
+                        l.env(legacy::COMBINE_ALPHA, legacy::REPLACE);
+                        l.env(legacy::SOURCE0_ALPHA, legacy::TEXTURE);
+                        l.env(legacy::OPERAND0_ALPHA, legacy::SRC_ALPHA);
+                        (l.tex_env_fv)(legacy::TEXTURE_ENV, legacy::RGB_SCALE, [scale].as_ptr());
+                    }
+                    // A constant level: texture × glColor.
+                    None => {
+                        (l.disable_client_state)(legacy::COLOR_ARRAY);
+                        (l.color_4f)(level, level, level, 1.0);
+                        gl.active_texture(glow::TEXTURE1);
+                        gl.disable(glow::TEXTURE_2D);
+                        gl.active_texture(glow::TEXTURE0);
+                        l.env(legacy::TEXTURE_ENV_MODE, legacy::MODULATE);
+                    }
                 }
-                // Vertex-lit: texture × vertex colour × 2^overbright, on unit 0.
-                Some(None) => {
-                    (l.enable_client_state)(legacy::COLOR_ARRAY);
-                    gl.active_texture(glow::TEXTURE1);
-                    gl.disable(glow::TEXTURE_2D);
-                    gl.active_texture(glow::TEXTURE0);
-                    l.env(legacy::TEXTURE_ENV_MODE, legacy::COMBINE);
-                    l.env(legacy::COMBINE_RGB, legacy::MODULATE);
-                    l.env(legacy::SOURCE0_RGB, legacy::TEXTURE);
-                    l.env(legacy::OPERAND0_RGB, legacy::SRC_COLOR);
-                    l.env(legacy::SOURCE1_RGB, legacy::PRIMARY_COLOR);
-                    l.env(legacy::OPERAND1_RGB, legacy::SRC_COLOR);
-                    l.env(legacy::COMBINE_ALPHA, legacy::REPLACE);
-                    l.env(legacy::SOURCE0_ALPHA, legacy::TEXTURE);
-                    l.env(legacy::OPERAND0_ALPHA, legacy::SRC_ALPHA);
-                    (l.tex_env_fv)(legacy::TEXTURE_ENV, legacy::RGB_SCALE, [scale].as_ptr());
-                }
-                // A constant level: texture × glColor.
-                None => {
-                    (l.disable_client_state)(legacy::COLOR_ARRAY);
-                    (l.color_4f)(level, level, level, 1.0);
-                    gl.active_texture(glow::TEXTURE1);
-                    gl.disable(glow::TEXTURE_2D);
-                    gl.active_texture(glow::TEXTURE0);
+                gl.active_texture(glow::TEXTURE0);
+                if baked != Some(None) {
                     l.env(legacy::TEXTURE_ENV_MODE, legacy::MODULATE);
                 }
             }
-            gl.active_texture(glow::TEXTURE0);
-            if baked != Some(None) {
-                l.env(legacy::TEXTURE_ENV_MODE, legacy::MODULATE);
-            }
-        }
-    });
+        },
+    );
     ff.unbind(gl);
     ff.reset(gl);
 }

@@ -51,8 +51,16 @@ unsafe fn set_light(ctx: &PassContext, l: &Legacy, lp: &LightPlan) {
     // SAFETY: see the caller's contract; every array holds what its parameter reads.
     unsafe {
         l.load_matrix(legacy::MODELVIEW, &ctx.plan.camera.view);
-        (l.light_fv)(legacy::LIGHT0, legacy::POSITION, [p.x, p.y, p.z, 1.0].as_ptr());
-        (l.light_fv)(legacy::LIGHT0, legacy::DIFFUSE, [color.x, color.y, color.z, 1.0].as_ptr());
+        (l.light_fv)(
+            legacy::LIGHT0,
+            legacy::POSITION,
+            [p.x, p.y, p.z, 1.0].as_ptr(),
+        );
+        (l.light_fv)(
+            legacy::LIGHT0,
+            legacy::DIFFUSE,
+            [color.x, color.y, color.z, 1.0].as_ptr(),
+        );
         (l.light_fv)(legacy::LIGHT0, legacy::AMBIENT, black.as_ptr());
         (l.light_fv)(legacy::LIGHT0, legacy::SPECULAR, black.as_ptr());
         let (direction, cutoff) = match light.kind {
@@ -64,17 +72,29 @@ unsafe fn set_light(ctx: &PassContext, l: &Legacy, lp: &LightPlan) {
             LightKind::Omni => (glam::Vec3::Z, 180.0),
         };
         let d = direction;
-        (l.light_fv)(legacy::LIGHT0, legacy::SPOT_DIRECTION, [d.x, d.y, d.z].as_ptr());
+        (l.light_fv)(
+            legacy::LIGHT0,
+            legacy::SPOT_DIRECTION,
+            [d.x, d.y, d.z].as_ptr(),
+        );
         (l.light_f)(legacy::LIGHT0, legacy::SPOT_CUTOFF, cutoff);
         (l.light_f)(legacy::LIGHT0, legacy::SPOT_EXPONENT, 1.0);
         (l.light_f)(legacy::LIGHT0, legacy::CONSTANT_ATTENUATION, 1.0);
         (l.light_f)(legacy::LIGHT0, legacy::LINEAR_ATTENUATION, 0.0);
         let r = light.radius.max(1e-3);
-        (l.light_f)(legacy::LIGHT0, legacy::QUADRATIC_ATTENUATION, 24.0 / (r * r));
+        (l.light_f)(
+            legacy::LIGHT0,
+            legacy::QUADRATIC_ATTENUATION,
+            24.0 / (r * r),
+        );
         (l.light_model_fv)(legacy::LIGHT_MODEL_AMBIENT, black.as_ptr());
         // Two-sided surfaces are lit on the side the camera sees, as in the shader path.
         (l.light_model_i)(legacy::LIGHT_MODEL_TWO_SIDE, 1);
-        (l.material_fv)(legacy::FRONT_AND_BACK, legacy::DIFFUSE, [1.0f32; 4].as_ptr());
+        (l.material_fv)(
+            legacy::FRONT_AND_BACK,
+            legacy::DIFFUSE,
+            [1.0f32; 4].as_ptr(),
+        );
         (l.material_fv)(legacy::FRONT_AND_BACK, legacy::AMBIENT, black.as_ptr());
         (l.material_fv)(legacy::FRONT_AND_BACK, legacy::SPECULAR, black.as_ptr());
     }
@@ -105,11 +125,7 @@ unsafe fn bind_map(ctx: &PassContext, ff: &FixedFunction, s: &ShadowBinding, sca
         // The range test: outside the map the border's depth 1 compares as lit.
         let wrap = match o.outside {
             Outside::Range => {
-                gl.tex_parameter_f32_slice(
-                    glow::TEXTURE_2D,
-                    glow::TEXTURE_BORDER_COLOR,
-                    &[1.0; 4],
-                );
+                gl.tex_parameter_f32_slice(glow::TEXTURE_2D, glow::TEXTURE_BORDER_COLOR, &[1.0; 4]);
                 glow::CLAMP_TO_BORDER
             }
             _ => glow::CLAMP_TO_EDGE,
@@ -238,11 +254,17 @@ fn draw_receivers(ctx: &PassContext, ff: &FixedFunction, receivers: &[u32], offs
     // SAFETY: client state of our own vertex array.
     unsafe { (ff.legacy.disable_client_state)(legacy::COLOR_ARRAY) };
     let view = ctx.plan.camera.view;
-    ff.draw_items(ctx, &view, &items, |c| c, |item| {
-        let tested = ctx.scene.materials[item.material].alpha_test.is_some() && !offset;
-        // SAFETY: fixed-function state.
-        unsafe { gl.depth_func(if tested { glow::EQUAL } else { glow::LEQUAL }) };
-    });
+    ff.draw_items(
+        ctx,
+        &view,
+        &items,
+        |c| c,
+        |item| {
+            let tested = ctx.scene.materials[item.material].alpha_test.is_some() && !offset;
+            // SAFETY: fixed-function state.
+            unsafe { gl.depth_func(if tested { glow::EQUAL } else { glow::LEQUAL }) };
+        },
+    );
     ff.unbind(gl);
 }
 

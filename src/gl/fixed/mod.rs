@@ -188,8 +188,7 @@ impl FixedFunction {
                         SurfaceOwner::World => Mat4::IDENTITY,
                         SurfaceOwner::Model(m) => ctx.scene.models[m].transform,
                     };
-                    self.legacy
-                        .load_matrix(legacy::MODELVIEW, &(*view * model));
+                    self.legacy.load_matrix(legacy::MODELVIEW, &(*view * model));
                     last_owner = Some(item.owner);
                 }
                 let material = &ctx.scene.materials[item.material];

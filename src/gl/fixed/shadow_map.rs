@@ -36,7 +36,9 @@ pub fn render(ctx: &PassContext, ff: &FixedFunction, view: &MapView, target: &De
         &caster_items(ctx, view),
         caster_cull(o.cull),
         |item| {
-            let test = materials[item.material].alpha_test.filter(|_| alpha_casters);
+            let test = materials[item.material]
+                .alpha_test
+                .filter(|_| alpha_casters);
             ff.material_alpha_test(gl, test);
         },
     );
