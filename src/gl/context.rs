@@ -107,7 +107,9 @@ pub const FAIL_BACKENDS_ENV: &str = "SHADOWLAB_FAIL_BACKENDS";
 #[derive(Debug, Error)]
 pub enum ContextError {
     /// Every path that was tried failed; each entry names the path and its reason.
-    #[error("no OpenGL context ({profile:?} profile) could be created:\n{}\nTo fix: {INSTALL_HINT}.",
+    /// (The ES 3.0 step of the core chain is listed among the failures.)
+    #[error("no OpenGL {} could be created:\n{}\nTo fix: {INSTALL_HINT}.",
+        match .profile { Profile::Core => "3.3 core context", Profile::Compatibility => "compatibility-profile context" },
         .failures.iter().map(|(b, why)| format!("  {b}: {why}")).collect::<Vec<_>>().join("\n"))]
     Unavailable {
         profile: Profile,
