@@ -157,19 +157,19 @@ fn fixed_function_replaces_what_it_cannot_draw_and_says_so() {
         "fixed_function",
     );
     let frame = m.measure(&asked).frame;
-    let replaced: Vec<_> = frame.fallbacks.iter().map(|f| f.option).collect();
+    // (The GL's own fallbacks, e.g. depth bounds on llvmpipe, are listed beside these.)
+    let replaced: Vec<_> = frame
+        .fallbacks
+        .iter()
+        .filter(|f| f.feature == "fixed_function")
+        .map(|f| f.option)
+        .collect();
     for option in ["shadow_map.filter", "shadow_map.omni", "plan.omni_cube"] {
         assert!(
             replaced.contains(&option),
             "{option} not listed: {replaced:?}"
         );
     }
-    assert!(
-        frame
-            .fallbacks
-            .iter()
-            .all(|f| f.feature == "fixed_function")
-    );
 }
 
 #[test]

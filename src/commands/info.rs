@@ -4,7 +4,7 @@
 use super::{CommonArgs, start_gl};
 use anyhow::Result;
 use serde_json::json;
-use shadowlab::plan::fallback;
+use shadowlab::plan::fixed_function;
 use shadowlab::presets::Preset;
 
 #[derive(clap::Args)]
@@ -19,7 +19,7 @@ pub fn run(common: &CommonArgs, args: &Args) -> Result<()> {
     let (ctx, renderer) = start_gl(&options)?;
     let caps = &renderer.caps_for(&options)?;
     // What these options would run with: each option the GL cannot run, and its replacement.
-    let (_, replaced) = fallback::resolve(&options, |f| caps.has(f));
+    let (_, replaced) = fixed_function::resolve_all(&options, |f| caps.has(f));
     let skipped: Vec<String> = ctx
         .skipped
         .iter()
@@ -92,8 +92,14 @@ pub fn run(common: &CommonArgs, args: &Args) -> Result<()> {
     }
     for r in &replaced {
         println!(
-            "  these options: {} = {} -> {} (no {})",
-            r.option, r.asked, r.used, r.feature
+            "  these options: {} = {} -> {} ({})",
+            r.option,
+            r.asked,
+            r.used,
+            match r.feature {
+                "fixed_function" => "the fixed-function pipeline cannot draw it".to_string(),
+                f => format!("no {f}"),
+            }
         );
     }
     for s in skipped {

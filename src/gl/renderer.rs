@@ -454,9 +454,7 @@ impl Renderer {
         request: FrameRequest,
     ) -> Result<Frame, RenderError> {
         let caps = self.caps_for(options)?;
-        let (options, mut fallbacks) = fallback::resolve(options, |f| caps.has(f));
-        let (options, legacy_replaced) = fixed_function::resolve(&options);
-        fallbacks.extend(legacy_replaced);
+        let (options, fallbacks) = fixed_function::resolve_all(options, |f| caps.has(f));
         if options.gl.pipeline == Pipeline::FixedFunction && self.fixed.is_none() {
             return Err(RenderError::Unsupported(
                 "gl.pipeline = fixed_function needs a compatibility-profile context with the \

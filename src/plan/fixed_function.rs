@@ -13,6 +13,16 @@ use crate::options::{Compare, Filter, OmniMode, Options, Pipeline, StencilPasses
 
 const FEATURE: &str = "fixed_function";
 
+/// `options` as this GL and pipeline run them: each choice that needs a missing feature
+/// replaced (`fallback::resolve`, `has` says what the GL has), then each one the
+/// fixed-function pipeline cannot draw; every replacement listed.
+pub fn resolve_all(options: &Options, has: impl Fn(&str) -> bool) -> (Options, Vec<Fallback>) {
+    let (options, mut taken) = super::fallback::resolve(options, has);
+    let (options, legacy) = resolve(&options);
+    taken.extend(legacy);
+    (options, taken)
+}
+
 /// `options` as the fixed-function pipeline runs them, with the replacements made; unchanged
 /// under `gl.pipeline = shaders`.
 pub fn resolve(options: &Options) -> (Options, Vec<Fallback>) {
