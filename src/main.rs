@@ -48,7 +48,7 @@ fn main() {
         Command::View(a) => commands::view::run(&cli.common, &a),
     };
     if let Err(e) = result {
-        eprintln!("error: {e:#}");
+        eprintln!("error: {}", commands::error_message(&e));
         std::process::exit(1);
     }
 }

@@ -142,3 +142,42 @@ pub fn start_gl(options: &Options) -> Result<(GlContext, Renderer)> {
     }
     Ok((ctx, renderer))
 }
+
+/// The error and its causes, each said once: library errors often print their cause in their
+/// own message too, and `{:#}` would then repeat it ("x: gone: gone").
+pub fn error_message(e: &anyhow::Error) -> String {
+    let mut message = e.to_string();
+    for cause in e.chain().skip(1) {
+        let text = cause.to_string();
+        if !message.contains(&text) {
+            message.push_str(": ");
+            message.push_str(&text);
+        }
+    }
+    message
+}
+
+#[cfg(test)]
+mod tests {
+    use super::error_message;
+
+    #[derive(Debug, thiserror::Error)]
+    #[error("{path}: {source}")]
+    struct Repeats {
+        path: String,
+        #[source]
+        source: std::io::Error,
+    }
+
+    #[test]
+    fn each_cause_is_said_once() {
+        let io = std::io::Error::new(std::io::ErrorKind::NotFound, "no such file");
+        let e = anyhow::Error::new(Repeats {
+            path: "a.toml".into(),
+            source: io,
+        });
+        assert_eq!(error_message(&e), "a.toml: no such file");
+        let e = anyhow::anyhow!("inner cause").context("while loading b.bsp");
+        assert_eq!(error_message(&e), "while loading b.bsp: inner cause");
+    }
+}
