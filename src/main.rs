@@ -27,6 +27,8 @@ enum Command {
     Inspect(commands::inspect::Args),
     /// Measure frame time and error against the exact reference over a sweep of options.
     Bench(commands::bench::Args),
+    /// Check maps of a data set: both techniques, planner on and off, against the reference.
+    Check(commands::check::Args),
     /// Regenerate the paper's figures and claims beside our measurements (index.html + .md).
     Reproduce(commands::reproduce::Args),
     /// Open the walkthrough viewer in a window (F1 for keys).
@@ -44,6 +46,7 @@ fn main() {
         Command::Options(a) => commands::options::run(&a),
         Command::Inspect(a) => commands::inspect::run(&cli.common, &a),
         Command::Bench(a) => commands::bench::run(&cli.common, &a),
+        Command::Check(a) => commands::check::run(&cli.common, &a),
         Command::Reproduce(a) => commands::reproduce::run(&cli.common, &a),
         Command::View(a) => commands::view::run(&cli.common, &a),
     };

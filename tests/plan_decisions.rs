@@ -780,7 +780,8 @@ fn assert_flat_clip(planes: [[f32; 4]; 4], d: f32) {
 #[test]
 fn depth_pass_parts_are_clipped_behind_the_depth() {
     let scene = fit_scene();
-    let o = options(&["plan.depth_clip=true"]);
+    // The clip-plane emulation: where EXT_depth_bounds_test is chosen it replaces the planes.
+    let o = options(&["plan.depth_clip=true", "plan.depth_bounds_test=false"]);
     let f = frame(
         &mut Planner::default(),
         &scene,
@@ -820,6 +821,7 @@ fn depth_fits_are_reused_only_for_the_same_depth() {
     let scene = fit_scene();
     let o = options(&[
         "plan.depth_clip=true",
+        "plan.depth_bounds_test=false",
         "plan.reuse_volume_draws=false",
         "plan.reuse_depth=false",
     ]);
@@ -848,7 +850,11 @@ fn depth_fits_are_reused_only_for_the_same_depth() {
     assert_flat_clip(zpass(&changed), 0.8);
 
     // The depth kept from the last frame (`plan.reuse_depth`): not read, its fits kept.
-    let o = options(&["plan.depth_clip=true", "plan.reuse_volume_draws=false"]);
+    let o = options(&[
+        "plan.depth_clip=true",
+        "plan.depth_bounds_test=false",
+        "plan.reuse_volume_draws=false",
+    ]);
     let kept = frame(&mut planner, &scene, &camera, &o, None);
     assert_eq!(kept.need, DepthNeed::Reuse);
     assert_eq!(kept.stats.depth_fits_reused, 1);
@@ -857,6 +863,7 @@ fn depth_fits_are_reused_only_for_the_same_depth() {
     // Without `reuse_depth_fits` the same depth is fitted again.
     let o = options(&[
         "plan.depth_clip=true",
+        "plan.depth_bounds_test=false",
         "plan.reuse_volume_draws=false",
         "plan.reuse_depth=false",
         "plan.reuse_depth_fits=false",

@@ -24,7 +24,7 @@ pub struct Args {
     map: Option<String>,
 }
 
-fn bsp_path(map: &str) -> String {
+pub fn bsp_path(map: &str) -> String {
     if map.to_ascii_lowercase().ends_with(".bsp") {
         map.to_string()
     } else {

@@ -1,6 +1,7 @@
 //! Subcommands and what they share: option assembly, scene loading, context creation.
 
 pub mod bench;
+pub mod check;
 pub mod info;
 pub mod inspect;
 pub mod options;

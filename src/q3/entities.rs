@@ -198,6 +198,47 @@ pub fn spawn_points(ents: &[Entity]) -> Vec<SpawnPoint> {
         .collect()
 }
 
+/// How far above a spawn point or item a placed light sits (a little over a player's eye
+/// height of 56, so the player model and the item cast shadows below it).
+pub const PLACED_LIGHT_HEIGHT: f32 = 64.0;
+/// A placed light's radius: about a room of an arena map.
+pub const PLACED_LIGHT_RADIUS: f32 = 400.0;
+
+/// Whether an entity is one a player picks up (Quake 3's item classes).
+fn is_item(e: &Entity) -> bool {
+    e.classname().is_some_and(|c| {
+        let c = c.to_ascii_lowercase();
+        ["item_", "weapon_", "ammo_", "holdable_"]
+            .iter()
+            .any(|p| c.starts_with(p))
+    })
+}
+
+/// One white omni light above each spawn point and item, for maps whose light entities were
+/// compiled away: named `placed0`, `placed1`, … in entity order.
+pub fn placed_lights(ents: &[Entity]) -> Vec<Light> {
+    ents.iter()
+        .filter(|e| {
+            e.is("info_player_deathmatch")
+                || e.is("info_player_start")
+                || e.classname()
+                    .is_some_and(|c| c.to_ascii_lowercase().starts_with("team_ctf_"))
+                    && e.classname()
+                        .is_some_and(|c| c.to_ascii_lowercase().contains("spawn"))
+                || is_item(e)
+        })
+        .filter_map(|e| e.origin().filter(|o| o.is_finite()))
+        .enumerate()
+        .map(|(i, origin)| {
+            Light::omni(
+                &format!("placed{i}"),
+                origin + Vec3::Z * PLACED_LIGHT_HEIGHT,
+                PLACED_LIGHT_RADIUS,
+            )
+        })
+        .collect()
+}
+
 /// Quake 3's default `light` value.
 pub const DEFAULT_LIGHT_INTENSITY: f32 = 300.0;
 /// Quake 3's default spot cone radius at the target (`radius` key).
@@ -341,6 +382,21 @@ mod tests {
         assert_eq!(ents[2].angle(), Some(45.0));
         assert_eq!(ents[3].angle(), None);
         assert_eq!(ents[4].origin(), None);
+    }
+
+    #[test]
+    fn placed_lights_sit_above_spawn_points_and_items_only() {
+        let ents = parse_entities(
+            "{\n\"classname\" \"info_player_deathmatch\"\n\"origin\" \"0 0 0\"\n}\n\
+             {\n\"classname\" \"weapon_rocketlauncher\"\n\"origin\" \"100 0 8\"\n}\n\
+             {\n\"classname\" \"misc_model\"\n\"origin\" \"5 5 5\"\n}\n\
+             {\n\"classname\" \"item_armor_body\"\n\"origin\" \"nan 0 0\"\n}\n",
+        )
+        .unwrap();
+        let lights = placed_lights(&ents);
+        let at: Vec<Vec3> = lights.iter().map(|l| l.position).collect();
+        assert_eq!(at, [Vec3::new(0.0, 0.0, 64.0), Vec3::new(100.0, 0.0, 72.0)]);
+        assert_eq!(lights[1].name, "placed1");
     }
 
     #[test]

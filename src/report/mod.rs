@@ -1,6 +1,7 @@
 //! Reports: benchmark runs, their tables and figures.
 
 pub mod bench;
+pub mod check;
 pub mod images;
 pub mod plot;
 pub mod reproduce;

@@ -96,6 +96,11 @@ pub enum LightSource {
     Entities,
     /// A DarkPlaces `.rtlights` file.
     Rtlights,
+    /// One omni light above each spawn point and item (`q3::entities::placed_lights`).
+    Placed,
+    /// The map's `light` entities, or placed lights where it has none (Quake 3's compiler
+    /// usually strips them).
+    EntitiesOrPlaced,
 }
 
 #[derive(Debug, Clone, Deserialize, Default)]
@@ -360,6 +365,11 @@ impl SceneFile {
             LightSource::None => Vec::new(),
             LightSource::Entities => entities::light_entities(map_entities),
             LightSource::Rtlights => self.rtlights()?,
+            LightSource::Placed => entities::placed_lights(map_entities),
+            LightSource::EntitiesOrPlaced => match entities::light_entities(map_entities) {
+                found if found.is_empty() => entities::placed_lights(map_entities),
+                found => found,
+            },
         };
         for name in &self.lights.exclude {
             if !lights.iter().any(|l| &l.name == name) {

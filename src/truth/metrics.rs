@@ -66,7 +66,7 @@ impl Counts {
 }
 
 /// Whether pixel `i` lies within 1 px of a boundary between lit and shadowed reference pixels.
-fn near_boundary(reference: &Mask, x: u32, y: u32) -> bool {
+pub fn near_boundary(reference: &Mask, x: u32, y: u32) -> bool {
     let (mut lit, mut shadowed) = (false, false);
     for yy in y.saturating_sub(1)..=(y + 1).min(reference.height - 1) {
         for xx in x.saturating_sub(1)..=(x + 1).min(reference.width - 1) {
