@@ -547,6 +547,22 @@ option_enum! {
         Front = "front",
         /// Faces away from the light (thesis 2.2.8: no bias needed, but only closed meshes cast).
         Back = "back",
+        /// Both faces: one-sided Quake 3 faces seen from behind cast too (open worlds), as the
+        /// exact reference counts every face as solid.
+        Both = "both",
+    }
+}
+
+option_enum! {
+    /// Which triangles of casters extrude shadow volumes.
+    pub enum VolumeCasters {
+        /// Triangles facing the light (the paper): a one-sided face seen from behind casts
+        /// nothing, so open worlds lose shadows.
+        Front = "front",
+        /// Every triangle: those facing away are extruded with the opposite winding, and edges
+        /// become sides by the signed rule (`edge_rule` is then `signed` whatever it says), as
+        /// the exact reference counts every face as solid.
+        Both = "both",
     }
 }
 
@@ -772,7 +788,8 @@ define_options! {
         /// Shadow frustum field of view relative to what it must cover (2 x cutoff for spots, 90
         /// degrees per cube face); below 1 it leaves part of the light outside the map.
         fov_scale: f32 = 1.0, in 0.1 ..= 2.0;
-        /// Caster faces drawn into the map: front (toward the light) or back (thesis 2.2.8).
+        /// Caster faces drawn into the map: front (toward the light), back (thesis 2.2.8), or
+        /// both (open worlds).
         cull: CasterFaces = CasterFaces::Front;
         /// Fit near and far to the casters in the light's view (thesis 2.2.2); off: near 1, far =
         /// the light's radius.
@@ -794,6 +811,8 @@ define_options! {
         wrap: StencilWrap = StencilWrap::Saturate;
         /// Which edges become sides: the paper's world rule, every edge, or the naive manifold rule.
         edge_rule: EdgeRule = EdgeRule::Paper;
+        /// Which triangles cast: those facing the light (paper) or every one (open worlds).
+        casters: VolumeCasters = VolumeCasters::Front;
         /// Extrude to infinity (w = 0, paper) or by a finite distance.
         extrusion: Extrusion = Extrusion::Infinite;
         /// Distance of finite extrusion, in world units.

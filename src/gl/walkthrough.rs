@@ -81,16 +81,17 @@ pub fn explain(step: &Step, options: &Options, executed: Executed) -> Explanatio
                 match sm.cull {
                     CasterFaces::Front => "front face",
                     CasterFaces::Back => "back face",
+                    CasterFaces::Both => "face of either side",
                 }
             ),
             gl_state: format!(
-                "glColorMask(0,0,0,0); glViewport(0,0,{0},{0}); glEnable(GL_CULL_FACE) keeping {1} \
-                 faces; glPolygonOffset({2}, {3}) x (1 + {4} x light order){5}; depth test \
+                "glColorMask(0,0,0,0); glViewport(0,0,{0},{0}); {1}; glPolygonOffset({2}, {3}) x (1 + {4} x light order){5}; depth test \
                  GL_LESS; target: {6}.",
                 sm.size,
                 match sm.cull {
-                    CasterFaces::Front => "front",
-                    CasterFaces::Back => "back",
+                    CasterFaces::Front => "glEnable(GL_CULL_FACE) keeping front faces",
+                    CasterFaces::Back => "glEnable(GL_CULL_FACE) keeping back faces",
+                    CasterFaces::Both => "glDisable(GL_CULL_FACE): both faces",
                 },
                 sm.offset_factor,
                 sm.offset_units,

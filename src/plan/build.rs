@@ -6,8 +6,8 @@ use super::scissor::{self, Scissor};
 use super::{CameraSetup, LightPlan, PartTriangles, Plan, PlanStats, VolumePart, cull};
 use crate::geometry::{Aabb, Frustum};
 use crate::options::{
-    CountingMode, OmniMode, Options, Outside, ShadowMapOptions, StencilPasses, Technique,
-    VolumeProjection,
+    CountingMode, OmniMode, Options, Outside, ShadowMapOptions, ShadowVolumeOptions,
+    StencilPasses, Technique, VolumeCasters, VolumeProjection,
 };
 use crate::scene::{Camera, Light, LightKind, Scene, SurfaceOwner};
 use crate::shadow::views::{ViewKind, shadow_views};
@@ -654,12 +654,13 @@ impl FrameFacts<'_> {
                 _ => Counting::ZFail,
             });
         }
-        // A ray seen through an alpha-tested caster's holes enters its volume through the
-        // front cap, which depth-pass does not draw.
-        let alpha = g.piece(piece).alpha_tested;
+        // A ray seen through an alpha-tested caster's holes, or past an open surface's
+        // one-sided face from behind, enters its volume through the front cap, which
+        // depth-pass does not draw.
+        let see_through = g.piece(piece).alpha_tested || g.piece(piece).open;
         let pos = self.scene.lights[plan.light].position;
         let boxed = volume::potentially_inside_shadow(bounds, self.camera.position, pos, self.near);
-        match (alpha, boxed, on && p.near_plane_test) {
+        match (see_through, boxed, on && p.near_plane_test) {
             (true, _, _) => Some(Counting::ZFail),
             (false, false, _) => Some(Counting::ZPass),
             (false, true, false) => Some(Counting::ZFail),
@@ -670,7 +671,7 @@ impl FrameFacts<'_> {
                     piece,
                     pos,
                     &self.near_quad,
-                    self.options.shadow_volume.facing_epsilon,
+                    &self.options.shadow_volume,
                 );
                 if near_tris.is_empty() {
                     Some(Counting::ZPass)
@@ -694,7 +695,7 @@ fn near_plane_triangles(
     piece: PieceRef,
     light: Vec3,
     near_quad: &[Vec3; 4],
-    facing_epsilon: f32,
+    o: &ShadowVolumeOptions,
 ) -> Vec<u32> {
     let to_local = volume::group_transform(scene, g.owner).inverse();
     let mut near: Vec<u32> = volume::near_plane_triangles(
@@ -702,7 +703,8 @@ fn near_plane_triangles(
         g.piece(piece),
         to_local.transform_point3(light).as_dvec3(),
         &near_quad.map(|q| to_local.transform_point3(q).as_dvec3()),
-        facing_epsilon,
+        o.facing_epsilon,
+        o.casters == VolumeCasters::Both,
     )
     .collect();
     // Sorted once here: both parts of the split look triangles up in it.

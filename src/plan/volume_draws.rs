@@ -20,7 +20,7 @@
 //! - a **draw** is one draw call of the stencil pass over consecutive parts.
 
 use crate::geometry::Aabb;
-use crate::options::ShadowVolumeOptions;
+use crate::options::{ShadowVolumeOptions, VolumeCasters};
 use crate::plan::clipped::{ClipTest, block_bounds};
 use crate::plan::depth_bounds::{
     DepthBound, DepthRange, EMPTY_RANGE, MAX_PLANES, range_union, window_depth_range,
@@ -293,6 +293,7 @@ fn settings(o: &ShadowVolumeOptions) -> VolumeSettings {
         extrusion: o.extrusion,
         finite_distance: o.finite_distance,
         facing_epsilon: o.facing_epsilon,
+        two_sided: o.casters == VolumeCasters::Both,
     }
 }
 

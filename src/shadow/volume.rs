@@ -39,6 +39,11 @@ pub struct Component {
     /// Whether it holds triangles of an alpha-tested material (rays pass through their holes
     /// into the volume through its front cap, so it must count depth-fail).
     pub alpha_tested: bool,
+    /// Whether its connected surface has an open edge (one triangle): a one-sided face of it
+    /// can then be seen from behind, through its front cap, as through an alpha-tested hole,
+    /// so it must count depth-fail too. (A closed surface hides its caps from a camera outside
+    /// its solid.) Chunks take their component's.
+    pub open: bool,
 }
 
 /// Which piece of a caster group a volume is extruded from: a whole connected component (the
@@ -274,6 +279,7 @@ impl CasterGroup {
                     edges: Vec::new(),
                     bounds: Aabb::EMPTY,
                     alpha_tested: false,
+                    open: false,
                 });
                 components.len() as u32 - 1
             });
@@ -287,8 +293,10 @@ impl CasterGroup {
         // An edge's triangles are connected through it, so its first triangle's component is all
         // of theirs.
         for (ei, e) in connectivity.edges.iter().enumerate() {
-            let c = tri_component[connectivity.triangles_of(e)[0] as usize];
-            components[c as usize].edges.push(ei as u32);
+            let tris = connectivity.triangles_of(e);
+            let c = &mut components[tri_component[tris[0] as usize] as usize];
+            c.edges.push(ei as u32);
+            c.open |= tris.len() == 1;
         }
         let (mut pieces, mut chunk_tree) = (Vec::new(), Vec::new());
         for comp in &components {
@@ -311,11 +319,15 @@ impl CasterGroup {
                         bounds.extend(connectivity.positions[v as usize]);
                     }
                 }
+                let open = triangles
+                    .first()
+                    .is_some_and(|&t| components[tri_component[t as usize] as usize].open);
                 Component {
                     triangles,
                     edges: Vec::new(),
                     bounds,
                     alpha_tested: false,
+                    open,
                 }
             })
             .collect();
@@ -391,6 +403,7 @@ impl CasterGroup {
         }
         Component {
             alpha_tested: piece.alpha_tested,
+            open: piece.open,
             triangles,
             edges,
             bounds,
@@ -412,6 +425,7 @@ impl CasterGroup {
             edges,
             bounds: span.iter().fold(Aabb::EMPTY, |b, c| b.union(&c.bounds)),
             alpha_tested: span.iter().any(|c| c.alpha_tested),
+            open: span.iter().any(|c| c.open),
         }
     }
 }
@@ -499,8 +513,9 @@ pub fn near_plane_shadowed(
     light: DVec3,
     quad: &[DVec3; 4],
     epsilon: f32,
+    two_sided: bool,
 ) -> bool {
-    near_plane_triangles(group, piece, light, quad, epsilon)
+    near_plane_triangles(group, piece, light, quad, epsilon, two_sided)
         .next()
         .is_some()
 }
@@ -515,6 +530,7 @@ pub fn near_plane_triangles<'a>(
     light: DVec3,
     quad: &[DVec3; 4],
     epsilon: f32,
+    two_sided: bool,
 ) -> impl Iterator<Item = u32> + 'a {
     let hull = [light, quad[0], quad[1], quad[2], quad[3]];
     let hull_edges: [DVec3; 8] = [
@@ -532,7 +548,12 @@ pub fn near_plane_triangles<'a>(
         hull_faces[i + 1] = hull_edges[i].cross(hull_edges[(i + 1) % 4]);
     }
     let c = &group.connectivity;
-    let facing = facing_flags_of(group, piece, light, epsilon);
+    // Two-sided casting: every triangle's shadow counts (the test is blind to winding).
+    let facing = if two_sided {
+        vec![true; c.triangles.len()]
+    } else {
+        facing_flags_of(group, piece, light, epsilon)
+    };
     let separated = move |axis: DVec3, tri: &[DVec3; 3]| -> bool {
         if axis.length_squared() == 0.0 {
             return false;
@@ -575,6 +596,9 @@ pub struct VolumeSettings {
     pub finite_distance: f32,
     /// Forsyth's facing epsilon (cosine): a triangle faces the light when n·l > -ε.
     pub facing_epsilon: f32,
+    /// Every triangle casts: those facing away with the opposite winding
+    /// (`shadow_volume.casters = both`).
+    pub two_sided: bool,
 }
 
 /// Volume geometry of one component for one light, as triangles of homogeneous vertices.
@@ -714,6 +738,14 @@ pub fn build_volume_of(
 ) -> VolumeMesh {
     let c = &group.connectivity;
     let mut facing = facing_flags_of(group, comp, light, s.facing_epsilon);
+    // Two-sided: the triangles facing away cast too, turned toward the light.
+    let flipped: Option<Vec<bool>> = s.two_sided.then(|| {
+        let away: Vec<bool> = facing.iter().map(|f| !f).collect();
+        for &t in &comp.triangles {
+            facing[t as usize] = true;
+        }
+        away
+    });
     let (culled, scale) = match cull {
         Some(rc) => cull_to_receivers(c, comp, light, &rc, &mut facing),
         None => (0, f64::INFINITY),
@@ -736,6 +768,7 @@ pub fn build_volume_of(
         light,
         s,
         facing: &facing,
+        flipped: flipped.as_deref(),
         far: if truncated { scale } else { f64::INFINITY },
     };
     for &ei in &comp.edges {
@@ -794,6 +827,8 @@ struct Sides<'a> {
     light: DVec3,
     s: &'a VolumeSettings,
     facing: &'a [bool],
+    /// Two-sided casting: the triangles cast with the opposite winding (they face away).
+    flipped: Option<&'a [bool]>,
     /// How far every facing triangle's volume reaches (a scale about the light; ∞: to
     /// infinity, or the settings' finite distance).
     far: f64,
@@ -826,9 +861,18 @@ impl Sides<'_> {
         mesh.quads += 1;
     }
 
+    /// Triangle t's vertices in the winding it casts with.
+    fn winding(&self, t: u32) -> [u32; 3] {
+        let [a, b, c] = self.c.triangles[t as usize];
+        match self.flipped {
+            Some(f) if f[t as usize] => [c, b, a],
+            _ => [a, b, c],
+        }
+    }
+
     /// The edge's direction in triangle t's winding.
     fn oriented(&self, t: u32, v: [u32; 2]) -> (u32, u32) {
-        let tri = self.c.triangles[t as usize];
+        let tri = self.winding(t);
         for k in 0..3 {
             let (a, b) = (tri[k], tri[(k + 1) % 3]);
             if (a, b) == (v[0], v[1]) || (a, b) == (v[1], v[0]) {
@@ -852,7 +896,14 @@ impl Sides<'_> {
             .copied()
             .filter(|&t| self.facing[t as usize])
             .collect();
-        match self.s.rule {
+        // Turned triangles meet unturned ones running the same way along an edge: only the
+        // signed rule counts both.
+        let rule = if self.flipped.is_some() {
+            EdgeRule::Signed
+        } else {
+            self.s.rule
+        };
+        match rule {
             // Two facing triangles on an edge that the rule treats as inner: their sides
             // cancel, since every facing triangle of a piece reaches equally far.
             EdgeRule::Paper if tris.len() == 2 && facing_here.len() == 2 => {}
@@ -908,7 +959,7 @@ impl Sides<'_> {
     /// The front cap (the facing triangles, `with_caps`) and the back cap (extruded to the
     /// reach, flipped); a truncated volume's back cap closes it under depth-pass too.
     fn caps(&self, mesh: &mut VolumeMesh, facing_list: &[u32], with_caps: bool) {
-        let tri = |t: u32| self.c.triangles[t as usize].map(|i| self.pos(i));
+        let tri = |t: u32| self.winding(t).map(|i| self.pos(i));
         if with_caps {
             for &t in facing_list {
                 for p in tri(t) {
@@ -955,6 +1006,7 @@ mod tests {
             extrusion: Extrusion::Infinite,
             finite_distance: 1000.0,
             facing_epsilon: 0.0,
+            two_sided: false,
         }
     }
 
@@ -1104,9 +1156,10 @@ mod tests {
                 .iter()
                 .fold(Aabb::EMPTY, |b, c| b.union(&c.bounds)),
             alpha_tested: false,
+            open: false,
         };
         let light = DVec3::new(0.0, 0.0, 5.5);
-        let near_test = |quad: &[DVec3; 4]| near_plane_shadowed(&g, &piece, light, quad, 0.0);
+        let near_test = |quad: &[DVec3; 4]| near_plane_shadowed(&g, &piece, light, quad, 0.0, false);
         let quad_at = |c: DVec3, half: f64| {
             [(-1.0, -1.0), (1.0, -1.0), (1.0, 1.0), (-1.0, 1.0)]
                 .map(|(x, y)| c + DVec3::new(x * half, y * half, 0.0))

@@ -133,6 +133,7 @@ pub fn caster_cull(faces: CasterFaces) -> impl Fn(Cull) -> Cull {
         (CasterFaces::Back, Cull::Back) => Cull::Front,
         (CasterFaces::Back, Cull::Front) => Cull::Back,
         (CasterFaces::Back, Cull::None) => Cull::None,
+        (CasterFaces::Both, _) => Cull::None,
     }
 }
 
