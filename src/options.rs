@@ -688,6 +688,9 @@ define_options! {
         /// piece whose shadow cannot hold the camera (Doom 3's test) and that is not
         /// alpha-tested, depth-fail the others (as `counting = auto`; `zpass` stays `zpass`).
         counting: bool = true;
+        /// With `counting`: pieces of open surfaces (an edge with one triangle) stay
+        /// depth-fail, as in the paper's frame: depth-pass on them changed masks on open maps.
+        open_depth_fail: bool = true;
         /// Refine that test (and `counting = auto`'s): a piece counts depth-fail only if one
         /// of its facing triangles meets the hull of the light and the camera's near-plane
         /// rectangle, not whenever its box, grown by the near distance, holds the light or the
@@ -788,9 +791,10 @@ define_options! {
         /// Shadow frustum field of view relative to what it must cover (2 x cutoff for spots, 90
         /// degrees per cube face); below 1 it leaves part of the light outside the map.
         fov_scale: f32 = 1.0, in 0.1 ..= 2.0;
-        /// Caster faces drawn into the map: front (toward the light), back (thesis 2.2.8), or
-        /// both (open worlds).
-        cull: CasterFaces = CasterFaces::Front;
+        /// Caster faces drawn into the map: front (toward the light, the paper), back (thesis
+        /// 2.2.8), or both (the default: Quake 3 worlds are open, and a one-sided face seen
+        /// from behind casts too; `shadowlab check --all`, docs/checks.md).
+        cull: CasterFaces = CasterFaces::Both;
         /// Fit near and far to the casters in the light's view (thesis 2.2.2); off: near 1, far =
         /// the light's radius.
         fit_near_far: bool = true;
@@ -811,8 +815,9 @@ define_options! {
         wrap: StencilWrap = StencilWrap::Saturate;
         /// Which edges become sides: the paper's world rule, every edge, or the naive manifold rule.
         edge_rule: EdgeRule = EdgeRule::Paper;
-        /// Which triangles cast: those facing the light (paper) or every one (open worlds).
-        casters: VolumeCasters = VolumeCasters::Front;
+        /// Which triangles cast: those facing the light (the paper) or every one (the
+        /// default: open worlds lose shadows otherwise; docs/checks.md).
+        casters: VolumeCasters = VolumeCasters::Both;
         /// Extrude to infinity (w = 0, paper) or by a finite distance.
         extrusion: Extrusion = Extrusion::Infinite;
         /// Distance of finite extrusion, in world units.

@@ -42,6 +42,8 @@ const PAPER: &[(&str, &str)] = &[
     ("shadow_map.offset_pass", "shadow_map"),
     ("shadow_map.outside", "clamp"),
     ("shadow_map.omni", "six_spots"),
+    ("shadow_map.cull", "front"),
+    ("shadow_volume.casters", "front"),
     ("shadow_volume.counting", "zfail"),
     ("shadow_volume.stencil", "two_pass"),
     ("shadow_volume.wrap", "saturate"),
@@ -154,14 +156,23 @@ mod tests {
     }
 
     #[test]
-    fn the_paper_differs_from_the_defaults_only_in_the_planner_and_the_technique() {
-        // Guards the claim in the options' docs that the other defaults are the paper's.
+    fn the_paper_differs_from_the_defaults_in_the_planner_the_technique_and_the_casters() {
+        // Guards the claim in the options' docs that the other defaults are the paper's (the
+        // casters: the paper's one-sided faces lose shadows on open worlds, docs/checks.md).
         let keys: Vec<String> = Preset::Paper
             .differences(&Options::default())
             .into_iter()
             .map(|d| d.key)
             .collect();
-        assert_eq!(keys, ["plan.enabled", "technique"]);
+        assert_eq!(
+            keys,
+            [
+                "plan.enabled",
+                "shadow_map.cull",
+                "shadow_volume.casters",
+                "technique"
+            ]
+        );
     }
 
     #[test]

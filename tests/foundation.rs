@@ -134,8 +134,8 @@ fn info_json_reports_the_egl_path_and_each_missing_feature_as_a_fallback() {
         .filter(|f| f["supported"] == false)
         .count();
     assert_eq!(missing, fallbacks.len());
-    // No options given: the defaults, which differ from the paper's frame in the planner and
-    // the technique only.
+    // No options given: the defaults, which differ from the paper's frame in the planner, the
+    // technique and the casters (both faces) only.
     assert_eq!(v["preset"], "default");
     let differs: Vec<&str> = v["differs_from_paper"]
         .as_array()
@@ -143,7 +143,15 @@ fn info_json_reports_the_egl_path_and_each_missing_feature_as_a_fallback() {
         .iter()
         .map(|d| d["key"].as_str().unwrap())
         .collect();
-    assert_eq!(differs, ["plan.enabled", "technique"]);
+    assert_eq!(
+        differs,
+        [
+            "plan.enabled",
+            "shadow_map.cull",
+            "shadow_volume.casters",
+            "technique"
+        ]
+    );
     if v["software"] == true {
         // llvmpipe lacks EXT_depth_bounds_test (DEVELOPERS.md).
         assert!(

@@ -62,6 +62,7 @@ fn check_cpu(case: &str, scene: &Scene) {
         extrusion: shadowlab::options::Extrusion::Infinite,
         finite_distance: 1000.0,
         facing_epsilon: 0.0,
+        two_sided: false,
     };
     for light in &scene.lights {
         for g in &groups.groups {

@@ -677,19 +677,21 @@ fn adjacent_chunks_kept_alike_are_merged() {
     assert!(g.chunks[0].bounds.max.x <= 0.0 && g.chunks[1].bounds.min.x >= 0.0);
 
     let camera = Camera::looking_at(Vec3::new(0.0, 600.0, 300.0), Vec3::ZERO);
+    // The plate is open: by default its chunks keep the paper's depth-fail
+    // (`plan.open_depth_fail`); the merge is tested with the switch off.
     let p = plan(&scene, &camera, &options(&["plan.merge_pieces=true"]));
+    assert_eq!(
+        countings(light0(&p)),
+        vec![(Counting::ZFail, PartTriangles::All); 2]
+    );
+    let merge = options(&["plan.merge_pieces=true", "plan.open_depth_fail=false"]);
+    let p = plan(&scene, &camera, &merge);
     assert_eq!(
         countings(light0(&p)),
         vec![(Counting::ZPass, PartTriangles::All); 2]
     );
 
-    let f = frame(
-        &mut Planner::default(),
-        &scene,
-        &camera,
-        &options(&["plan.merge_pieces=true"]),
-        None,
-    );
+    let f = frame(&mut Planner::default(), &scene, &camera, &merge, None);
     assert_eq!((f.stats.chunks_merged, f.stats.merged_parts), (2, 1));
     assert_eq!(f.parts.len(), 1);
     assert_eq!(f.parts[0].piece, PieceId::Chunks(0, 2));
@@ -698,7 +700,7 @@ fn adjacent_chunks_kept_alike_are_merged() {
         &mut Planner::default(),
         &scene,
         &camera,
-        &options(&[]),
+        &options(&["plan.open_depth_fail=false"]),
         None,
     );
     assert_eq!((f.stats.chunks_merged, f.stats.merged_parts), (0, 0));
@@ -717,7 +719,8 @@ fn adjacent_chunks_kept_alike_are_merged() {
 fn chunks_counted_differently_are_not_merged() {
     let scene = plate_scene();
     let camera = Camera::looking_at(Vec3::new(-10.0, 0.0, 15.0), Vec3::new(20.0, 0.0, 0.0));
-    let o = options(&["plan.merge_pieces=true"]);
+    // The plate is open: the switch lets its chunks count as the near plane allows.
+    let o = options(&["plan.merge_pieces=true", "plan.open_depth_fail=false"]);
     let p = plan(&scene, &camera, &o);
     let mut by_chunk: Vec<(usize, Counting)> = light0(&p)
         .volumes

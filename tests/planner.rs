@@ -390,9 +390,15 @@ fn the_gpu_depth_reduction_is_the_pyramid_of_the_full_readback() {
 fn depth_fits_are_reused_only_while_the_depth_stays() {
     let (scene, _, options) = load_scene_file("wrackdm17");
     // Draws kept whole would hide the fits: off here (see the next test).
+    // The world is open: depth-pass parts (the ones fitted) only without open_depth_fail.
     let reuse = with(
         &options,
-        &["technique=shadow_volume", "plan.reuse_volume_draws=false"],
+        &[
+            "technique=shadow_volume",
+            "plan.reuse_volume_draws=false",
+            "plan.open_depth_fail=false",
+            "shadow_volume.casters=front",
+        ],
     );
     let fresh = with(&reuse, &["plan.reuse_depth_fits=false"]);
     let (ctx, mut r) = gl_on(BackendChoice::Egl, &reuse);
@@ -526,6 +532,11 @@ fn split_counting_changes_at_most_edge_pixels() {
                 "technique=shadow_volume",
                 "shadow_volume.edge_rule=signed",
                 "plan.split_counting=false",
+                // The worlds are open: by default their pieces keep depth-fail, and none is
+                // split; the split is tested where depth-pass is let run, on the paper's
+                // casters (two-sided casting needs depth-fail on open pieces).
+                "plan.open_depth_fail=false",
+                "shadow_volume.casters=front",
             ],
         );
         let split = with(&whole, &["plan.split_counting=true"]);
@@ -846,6 +857,7 @@ fn with_the_papers_edge_rule_culling_only_closes_leaks() {
         &options,
         &[
             "technique=shadow_volume",
+            "shadow_volume.casters=front",
             "plan.counting=false",
             "plan.truncate_volumes=false",
         ],

@@ -6,8 +6,8 @@ use super::scissor::{self, Scissor};
 use super::{CameraSetup, LightPlan, PartTriangles, Plan, PlanStats, VolumePart, cull};
 use crate::geometry::{Aabb, Frustum};
 use crate::options::{
-    CountingMode, OmniMode, Options, Outside, ShadowMapOptions, ShadowVolumeOptions,
-    StencilPasses, Technique, VolumeCasters, VolumeProjection,
+    CountingMode, OmniMode, Options, Outside, ShadowMapOptions, ShadowVolumeOptions, StencilPasses,
+    Technique, VolumeCasters, VolumeProjection,
 };
 use crate::scene::{Camera, Light, LightKind, Scene, SurfaceOwner};
 use crate::shadow::views::{ViewKind, shadow_views};
@@ -654,11 +654,12 @@ impl FrameFacts<'_> {
                 _ => Counting::ZFail,
             });
         }
-        // A ray seen through an alpha-tested caster's holes, or past an open surface's
-        // one-sided face from behind, enters its volume through the front cap, which
-        // depth-pass does not draw.
-        let see_through = g.piece(piece).alpha_tested || g.piece(piece).open;
+        // A ray seen through an alpha-tested caster's holes enters its volume through the
+        // front cap, which depth-pass does not draw; an open surface keeps the paper's
+        // depth-fail (see `Component::open`).
         let pos = self.scene.lights[plan.light].position;
+        let open = g.piece(piece).open && p.open_depth_fail;
+        let see_through = g.piece(piece).alpha_tested || open;
         let boxed = volume::potentially_inside_shadow(bounds, self.camera.position, pos, self.near);
         match (see_through, boxed, on && p.near_plane_test) {
             (true, _, _) => Some(Counting::ZFail),

@@ -39,10 +39,10 @@ pub struct Component {
     /// Whether it holds triangles of an alpha-tested material (rays pass through their holes
     /// into the volume through its front cap, so it must count depth-fail).
     pub alpha_tested: bool,
-    /// Whether its connected surface has an open edge (one triangle): a one-sided face of it
-    /// can then be seen from behind, through its front cap, as through an alpha-tested hole,
-    /// so it must count depth-fail too. (A closed surface hides its caps from a camera outside
-    /// its solid.) Chunks take their component's.
+    /// Whether its connected surface has an open edge (one triangle). Depth-pass on such a
+    /// piece changed masks on open Quake 3 worlds (ctf_compromise: 20 179 pixels beyond the
+    /// edge band against the paper's depth-fail), so the planner keeps it at depth-fail
+    /// (`plan.open_depth_fail`). Chunks take their component's.
     pub open: bool,
 }
 
@@ -147,9 +147,17 @@ fn shadow_reach(
     let bounds = Aabb::from_points(corners);
     let in_range = shadow_bounds(&bounds, light, radius);
     let tri = corners.map(|p| p.as_dvec3());
+    // The triangle's plane turned toward the light: a triangle cast from behind
+    // (`VolumeSettings::two_sided`) shadows its own front side.
     let plane = &c.planes[t];
+    let toward = if plane.normal.dot(l) + plane.d < 0.0 {
+        -1.0
+    } else {
+        1.0
+    };
+    let (normal, d) = (plane.normal * toward, plane.d * toward);
     // Planes (n, d), inside where n·x + d >= 0: behind the triangle, and the pyramid's sides.
-    let mut planes = vec![(-plane.normal, -plane.d - BEHIND)];
+    let mut planes = vec![(-normal, -d - BEHIND)];
     for k in 0..3 {
         let (a, b, opposite) = (tri[k], tri[(k + 1) % 3], tri[(k + 2) % 3]);
         let mut n = (b - a).cross(a - l);
@@ -168,8 +176,8 @@ fn shadow_reach(
     } else {
         f64::INFINITY
     };
-    let height = plane.normal.dot(l) + plane.d;
-    let behind = -plane.normal;
+    let height = normal.dot(l) + d;
+    let behind = -normal;
     let mut reach: Option<f64> = None;
     for b in boxes {
         if !b.intersects(&in_range)
@@ -180,7 +188,7 @@ fn shadow_reach(
             continue;
         }
         let cut = b.intersection(&in_range);
-        let deepest = (behind.dot(furthest_corner(&cut, behind)) - plane.d).max(0.0);
+        let deepest = (behind.dot(furthest_corner(&cut, behind)) - d).max(0.0);
         let by_box = if height > 1e-6 {
             1.0 + (deepest * 1.01 + FAR_CAP_MARGIN) / height
         } else {
@@ -741,8 +749,10 @@ pub fn build_volume_of(
     // Two-sided: the triangles facing away cast too, turned toward the light.
     let flipped: Option<Vec<bool>> = s.two_sided.then(|| {
         let away: Vec<bool> = facing.iter().map(|f| !f).collect();
+        // Not those without area or with a corner at the light, which cast no volume.
+        let cast_either_way = facing_flags_of(group, comp, light, 1.0 + 1e-9);
         for &t in &comp.triangles {
-            facing[t as usize] = true;
+            facing[t as usize] = cast_either_way[t as usize];
         }
         away
     });
@@ -1159,7 +1169,8 @@ mod tests {
             open: false,
         };
         let light = DVec3::new(0.0, 0.0, 5.5);
-        let near_test = |quad: &[DVec3; 4]| near_plane_shadowed(&g, &piece, light, quad, 0.0, false);
+        let near_test =
+            |quad: &[DVec3; 4]| near_plane_shadowed(&g, &piece, light, quad, 0.0, false);
         let quad_at = |c: DVec3, half: f64| {
             [(-1.0, -1.0), (1.0, -1.0), (1.0, 1.0), (-1.0, 1.0)]
                 .map(|(x, y)| c + DVec3::new(x * half, y * half, 0.0))
@@ -1378,5 +1389,71 @@ mod tests {
             let d = DVec3::new(p[0] as f64, p[1] as f64, p[2] as f64).distance(light);
             assert!(d < 62.0, "{d}");
         }
+    }
+
+    /// Two quads side by side in one plane, one facing the light and one (one-sided) facing
+    /// away: an open surface seen from behind in part.
+    fn half_turned_floor() -> CasterGroup {
+        let (a, b, c, d) = (
+            Vec3::new(-2.0, -1.0, 0.0),
+            Vec3::new(0.0, -1.0, 0.0),
+            Vec3::new(0.0, 1.0, 0.0),
+            Vec3::new(-2.0, 1.0, 0.0),
+        );
+        let (e, f) = (Vec3::new(2.0, -1.0, 0.0), Vec3::new(2.0, 1.0, 0.0));
+        let up = [[a, b, c], [a, c, d]];
+        let down = [[b, f, e], [b, c, f]];
+        CasterGroup::build(SurfaceOwner::World, up.into_iter().chain(down).collect())
+    }
+
+    #[test]
+    fn two_sided_casting_shadows_what_any_face_hides_and_one_sided_loses_the_turned_half() {
+        let g = half_turned_floor();
+        let light = DVec3::new(0.3, 0.2, 10.0);
+        let s = VolumeSettings {
+            extrusion: Extrusion::Finite,
+            finite_distance: 100.0,
+            ..settings(EdgeRule::Paper)
+        };
+        let grid = || {
+            (0..25).flat_map(|i| {
+                (0..13)
+                    .map(move |j| DVec3::new(-6.05 + 0.5 * i as f64, -3.05 + 0.5 * j as f64, -3.0))
+            })
+        };
+        // Hidden from the light by either quad (the reference counts every face as solid).
+        let hidden = |p: DVec3| {
+            let t = p.z / (p.z - light.z);
+            let q = p + (light - p) * t;
+            q.x.abs() <= 2.0 && q.y.abs() <= 1.0
+        };
+        let count = |two_sided: bool| {
+            let s = VolumeSettings { two_sided, ..s };
+            let v = build_volume_of(&g, &g.components[0], light, &s, true, None);
+            let windings: Vec<(DVec3, f64)> =
+                grid().map(|p| (p, winding(&v.vertices, p))).collect();
+            // Closed and wound one way: every count 0 or the same ±1 (a count of the other
+            // sign would cancel in the stencil, or saturate at 0 and light the point).
+            let sign = windings
+                .iter()
+                .map(|w| w.1)
+                .find(|w| w.abs() > 0.5)
+                .unwrap_or(1.0);
+            for &(p, w) in &windings {
+                assert!(
+                    w.abs() < 1e-6 || (w - sign.signum()).abs() < 1e-6,
+                    "{p} {w}"
+                );
+            }
+            windings
+                .iter()
+                .filter(|(p, w)| (w.abs() > 0.5) != hidden(*p))
+                .count()
+        };
+        let hidden_points = grid().filter(|&p| hidden(p)).count();
+        assert!(hidden_points > 40, "{hidden_points}");
+        assert_eq!(count(true), 0);
+        // One-sided (the paper): the turned half casts nothing.
+        assert!(count(false) * 3 > hidden_points, "{}", count(false));
     }
 }
