@@ -19,6 +19,13 @@ use shadowlab::truth::{self, Reference, Tracing};
 
 const SM: &str = "technique=shadow_map";
 const SV: &str = "technique=shadow_volume";
+/// The paper's casting (triangles facing the light only): the cases of its edge rule and of
+/// its saturating counts are about volumes built that way (the default casts from both sides,
+/// which forces the signed rule and doubles counts on closed casters).
+const PAPER_CASTERS: &str = "shadow_volume.casters=front";
+/// The planner's depth-pass choice on open surfaces too, as these cases were measured (the
+/// default keeps open pieces depth-fail: `plan.open_depth_fail`).
+const OPEN_ZPASS: &str = "plan.open_depth_fail=false";
 
 fn pct(x: f64) -> String {
     format!("{:.3}%", 100.0 * x)
@@ -279,22 +286,41 @@ fn case05_non_manifold_and_open_geometry() {
     );
     assert!(edges.non_manifold >= 1 && edges.open >= 8);
     check_cpu(case, &scene);
-    let mut m = Measurer::new(scene, &options_with(&[SV]));
-    let paper = report(case, "SV paper rule", &m.measure(&options_with(&[SV])));
+    let mut m = Measurer::new(scene, &options_with(&[SV, PAPER_CASTERS, OPEN_ZPASS]));
+    let paper = report(
+        case,
+        "SV paper rule",
+        &m.measure(&options_with(&[SV, PAPER_CASTERS, OPEN_ZPASS])),
+    );
     let all = report(
         case,
         "SV extrude all",
-        &m.measure(&options_with(&[SV, "shadow_volume.edge_rule=all"])),
+        &m.measure(&options_with(&[
+            SV,
+            PAPER_CASTERS,
+            OPEN_ZPASS,
+            "shadow_volume.edge_rule=all",
+        ])),
     );
     let signed = report(
         case,
         "SV signed rule",
-        &m.measure(&options_with(&[SV, "shadow_volume.edge_rule=signed"])),
+        &m.measure(&options_with(&[
+            SV,
+            PAPER_CASTERS,
+            OPEN_ZPASS,
+            "shadow_volume.edge_rule=signed",
+        ])),
     );
     let naive = report(
         case,
         "SV manifold rule",
-        &m.measure(&options_with(&[SV, "shadow_volume.edge_rule=manifold"])),
+        &m.measure(&options_with(&[
+            SV,
+            PAPER_CASTERS,
+            OPEN_ZPASS,
+            "shadow_volume.edge_rule=manifold",
+        ])),
     );
     let sm = report(case, "SM", &m.measure(&options_with(&[SM])));
     // The paper's rule skips an edge shared by two facing triangles, which an exact duplicate
@@ -314,34 +340,51 @@ fn case06_more_than_255_volumes_and_many_lights() {
     let case = "6 overlap";
     let scene = hard("many_volumes");
     check_cpu(case, &scene);
-    let mut m = Measurer::new(scene, &options_with(&[SV]));
+    let mut m = Measurer::new(scene, &options_with(&[SV, PAPER_CASTERS, OPEN_ZPASS]));
     let zpass = "shadow_volume.counting=zpass";
     // The planner counts in one wrapping pass; saturating counts need the paper's two passes.
     let two_pass = "plan.one_pass_stencil=false";
     let sat = report(
         case,
         "SV zpass saturate (paper's card)",
-        &m.measure(&options_with(&[SV, zpass, two_pass])),
+        &m.measure(&options_with(&[
+            SV,
+            PAPER_CASTERS,
+            OPEN_ZPASS,
+            zpass,
+            two_pass,
+        ])),
     );
     let wrap = report(
         case,
         "SV zpass wrap",
-        &m.measure(&options_with(&[SV, zpass, "shadow_volume.wrap=wrap"])),
+        &m.measure(&options_with(&[
+            SV,
+            PAPER_CASTERS,
+            OPEN_ZPASS,
+            zpass,
+            "shadow_volume.wrap=wrap",
+        ])),
     );
     let zfail = report(
         case,
         "SV zfail saturate (paper)",
-        &m.measure(&options_with(&[SV, two_pass])),
+        &m.measure(&options_with(&[SV, PAPER_CASTERS, OPEN_ZPASS, two_pass])),
     );
     let planner = report(
         case,
         "SV, the planner's one pass",
-        &m.measure(&options_with(&[SV])),
+        &m.measure(&options_with(&[SV, PAPER_CASTERS, OPEN_ZPASS])),
     );
     let zfail_wrap = report(
         case,
         "SV zfail wrap",
-        &m.measure(&options_with(&[SV, "shadow_volume.wrap=wrap"])),
+        &m.measure(&options_with(&[
+            SV,
+            PAPER_CASTERS,
+            OPEN_ZPASS,
+            "shadow_volume.wrap=wrap",
+        ])),
     );
     // Saturating counts fail behind more than 255 volumes either way (depth-fail rays continue
     // under the floor through them); wrapping counts fail only where exactly 256 overlap.
@@ -356,7 +399,11 @@ fn case06_more_than_255_volumes_and_many_lights() {
     let mut m = Measurer::new(scene, &options_with(&[SM]));
     let grow = m.measure(&options_with(&[SM]));
     let flat = m.measure(&options_with(&[SM, "shadow_map.offset_growth=0"]));
-    let sv = report(case, "SV", &m.measure(&options_with(&[SV])));
+    let sv = report(
+        case,
+        "SV",
+        &m.measure(&options_with(&[SV, PAPER_CASTERS, OPEN_ZPASS])),
+    );
     report(case, "SM growth 1 (paper)", &grow);
     report(case, "SM no growth", &flat);
     // The paper's growth: light k's offset is (1 + k) times the first's, so later lights lose the
