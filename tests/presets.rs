@@ -25,10 +25,13 @@ fn the_paper_preset_runs_the_papers_frame_on_oa_dm1() {
     let planned = m.measure(&options_with(&["technique=shadow_volume"]));
     let q = &planned.frame.plan_stats;
     assert!(q.stencil_passes == 1 && q.zpass_parts > 0, "{q:?}");
-    // The same frame as the planner switched off by hand with the paper's technique.
+    // The same frame as the planner switched off by hand with the paper's technique and
+    // casters (the defaults cast from both sides).
     let by_hand = m.measure(&options_with(&[
         "plan.enabled=false",
         "technique=shadow_volume",
+        "shadow_volume.casters=front",
+        "shadow_map.cull=front",
     ]));
     for mask in &preset.frame.masks {
         assert_eq!(
