@@ -16,7 +16,8 @@ pub mod stencil;
 use super::legacy::{self, Legacy};
 use super::passes::{PassContext, apply_cull};
 use super::upload::DrawItem;
-use crate::scene::{AlphaFunc, SurfaceOwner, Vertex};
+use crate::scene::{AlphaFunc, Vertex};
+use crate::shadow::volume::group_transform;
 use glam::Mat4;
 use glow::HasContext;
 use std::rc::Rc;
@@ -184,10 +185,7 @@ impl FixedFunction {
         unsafe {
             for item in items {
                 if last_owner != Some(item.owner) {
-                    let model = match item.owner {
-                        SurfaceOwner::World => Mat4::IDENTITY,
-                        SurfaceOwner::Model(m) => ctx.scene.models[m].transform,
-                    };
+                    let model = group_transform(ctx.scene, item.owner);
                     self.legacy.load_matrix(legacy::MODELVIEW, &(*view * model));
                     last_owner = Some(item.owner);
                 }

@@ -7,9 +7,8 @@ use super::FixedFunction;
 use crate::gl::legacy;
 use crate::gl::passes::PassContext;
 use crate::gl::passes::state::DrawState;
-use crate::gl::passes::stencil::{face_op, ops};
+use crate::gl::passes::stencil;
 use crate::gl::volumes::LightVolumes;
-use crate::options::VolumeProjection;
 use crate::plan::scissor::Scissor;
 use crate::shadow::volume::Counting;
 use glow::HasContext;
@@ -45,66 +44,21 @@ pub fn draw(
 ) {
     let gl = ctx.gl;
     let o = &ctx.options.shadow_volume;
-    // SAFETY: fixed-function state on the bound framebuffer.
+    stencil::begin(gl, o);
+    // SAFETY: fixed-function state of the current compatibility context.
     unsafe {
         gl.use_program(None);
-        gl.stencil_mask(0xff);
-        gl.clear_stencil(0);
-        gl.clear(glow::STENCIL_BUFFER_BIT);
-        gl.color_mask(false, false, false, false);
-        gl.depth_mask(false);
-        gl.enable(glow::DEPTH_TEST);
-        gl.depth_func(glow::LESS);
-        gl.disable(glow::BLEND);
-        gl.enable(glow::STENCIL_TEST);
-        gl.stencil_func(glow::ALWAYS, 0, 0xff);
-        if o.depth_offset {
-            gl.enable(glow::POLYGON_OFFSET_FILL);
-            gl.polygon_offset(0.0, 1.0);
-        } else {
-            gl.disable(glow::POLYGON_OFFSET_FILL);
-        }
-        if o.projection == VolumeProjection::DepthClamp {
-            gl.enable(glow::DEPTH_CLAMP);
-        }
         ff.legacy
             .load_matrix(legacy::PROJECTION, &ctx.plan.camera.projection);
     }
     // The same transform as the unlit pass: front caps land on their casters' depths.
     ff.clip_planes(gl, None);
-    let (incr, decr) = ops(o.wrap, ctx.plan.stencil);
-    for counting in [Counting::ZFail, Counting::ZPass] {
-        if !volumes.draws.iter().any(|d| d.counting == counting) {
-            continue;
-        }
-        let (incr_face, decr_face) = match counting {
-            Counting::ZFail => (glow::BACK, glow::FRONT),
-            Counting::ZPass => (glow::FRONT, glow::BACK),
-        };
-        for (face, op) in [(incr_face, incr), (decr_face, decr)] {
-            let (sfail, dpfail, dppass) = face_op(counting, op);
-            // SAFETY: fixed-function state: draw only `face`, cull the other.
-            unsafe {
-                gl.enable(glow::CULL_FACE);
-                gl.cull_face(if face == glow::BACK {
-                    glow::FRONT
-                } else {
-                    glow::BACK
-                });
-                gl.stencil_op(sfail, dpfail, dppass);
-            }
-            draw_parts(ctx, ff, volumes, counting);
-        }
-    }
+    stencil::count(gl, volumes, ctx.plan.stencil, o.wrap, |counting| {
+        draw_parts(ctx, ff, volumes, counting)
+    });
     crate::gl::passes::set_scissor(gl, light_scissor);
     ff.reset(gl);
-    // SAFETY: state reset for the lit pass, which sets what it needs.
-    unsafe {
-        gl.stencil_op(glow::KEEP, glow::KEEP, glow::KEEP);
-        gl.disable(glow::POLYGON_OFFSET_FILL);
-        gl.disable(glow::DEPTH_CLAMP);
-        gl.color_mask(true, true, true, true);
-    }
+    stencil::end(gl, o);
 }
 
 /// The fill variant: where the stencil is not zero, scale the frame by `shade` and zero the

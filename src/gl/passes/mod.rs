@@ -87,10 +87,7 @@ pub fn draw_items_with(
         gl.active_texture(glow::TEXTURE0);
         for item in items {
             if last_owner != Some(item.owner) {
-                let model = match item.owner {
-                    crate::scene::SurfaceOwner::World => glam::Mat4::IDENTITY,
-                    crate::scene::SurfaceOwner::Model(m) => ctx.scene.models[m].transform,
-                };
+                let model = crate::shadow::volume::group_transform(ctx.scene, item.owner);
                 program.set_mat4(gl, "u_model", &model);
                 program.set_mat3(gl, "u_normal_model", &normal_matrix(&model));
                 last_owner = Some(item.owner);

@@ -15,7 +15,7 @@ use super::state::DrawState;
 use crate::gl::depth_bounds_ext::{self, DepthBoundsExt};
 use crate::gl::program::{Program, has_clip_distances};
 use crate::gl::volumes::LightVolumes;
-use crate::options::{StencilPasses, StencilWrap, VolumeProjection};
+use crate::options::{ShadowVolumeOptions, StencilPasses, StencilWrap, VolumeProjection};
 use crate::plan::depth_bounds::MAX_PLANES;
 use crate::plan::scissor::Scissor;
 use crate::shadow::volume::Counting;
@@ -24,7 +24,7 @@ use glow::HasContext;
 /// (increment, decrement) operations. One pass always wraps: front and back faces arrive
 /// interleaved, and a saturating DECR at 0 before its INCR would lose a count (the paper pairs
 /// two-sided stencil with EXT_stencil_wrap for this reason).
-pub fn ops(wrap: StencilWrap, passes: StencilPasses) -> (u32, u32) {
+fn ops(wrap: StencilWrap, passes: StencilPasses) -> (u32, u32) {
     match (wrap, passes) {
         (StencilWrap::Saturate, StencilPasses::TwoPass) => (glow::INCR, glow::DECR),
         _ => (glow::INCR_WRAP, glow::DECR_WRAP),
@@ -32,7 +32,7 @@ pub fn ops(wrap: StencilWrap, passes: StencilPasses) -> (u32, u32) {
 }
 
 /// glStencilOp arguments (sfail, dpfail, dppass) for a face that increments or decrements.
-pub fn face_op(counting: Counting, op: u32) -> (u32, u32, u32) {
+fn face_op(counting: Counting, op: u32) -> (u32, u32, u32) {
     match counting {
         Counting::ZFail => (glow::KEEP, op, glow::KEEP),
         Counting::ZPass => (glow::KEEP, glow::KEEP, op),
@@ -92,6 +92,48 @@ pub fn draw(
 ) {
     let gl = ctx.gl;
     let o = &ctx.options.shadow_volume;
+    begin(gl, o);
+    // SAFETY: fixed-function state.
+    unsafe {
+        // Each draw's depth clip planes (zero where it has none); none on ES.
+        if has_clip_distances(gl) {
+            for i in 0..MAX_PLANES as u32 {
+                gl.enable(glow::CLIP_DISTANCE0 + i);
+            }
+        }
+    }
+    // The plan asks for the depth bounds test only where the probe found the extension and
+    // its entry point (plan::fallback); counts are right without it, only slower.
+    let bounds = volumes
+        .draws
+        .iter()
+        .any(|d| d.depth_bounds.is_some())
+        .then(depth_bounds_ext::current)
+        .flatten();
+    program.bind(gl);
+    program.set_mat4(gl, "u_view_proj", &ctx.plan.camera.view_proj);
+    count(gl, volumes, ctx.plan.stencil, o.wrap, |counting| {
+        draw_parts(gl, program, volumes, counting, bounds)
+    });
+    super::set_scissor(gl, light_scissor);
+    // SAFETY: state reset for the lit pass; only what was enabled (ES may lack the switch).
+    unsafe {
+        if let Some(ext) = bounds {
+            ext.disable(gl);
+        }
+        if has_clip_distances(gl) {
+            for i in 0..MAX_PLANES as u32 {
+                gl.disable(glow::CLIP_DISTANCE0 + i);
+            }
+        }
+    }
+    end(gl, o);
+}
+
+/// The state every volume pass counts with (shader or fixed-function): the stencil cleared
+/// and always passing, colour and depth writes off, depth test LESS, the options' offset and
+/// depth clamp.
+pub fn begin(gl: &glow::Context, o: &ShadowVolumeOptions) {
     // SAFETY: fixed-function state on the bound framebuffer.
     unsafe {
         gl.stencil_mask(0xff);
@@ -114,78 +156,69 @@ pub fn draw(
         if o.projection == VolumeProjection::DepthClamp {
             gl.enable(glow::DEPTH_CLAMP);
         }
-        // Each draw's depth clip planes (zero where it has none); none on ES.
-        if has_clip_distances(gl) {
-            for i in 0..MAX_PLANES as u32 {
-                gl.enable(glow::CLIP_DISTANCE0 + i);
-            }
-        }
     }
-    // The plan asks for the depth bounds test only where the probe found the extension and
-    // its entry point (plan::fallback); counts are right without it, only slower.
-    let bounds = volumes
-        .draws
-        .iter()
-        .any(|d| d.depth_bounds.is_some())
-        .then(depth_bounds_ext::current)
-        .flatten();
-    program.bind(gl);
-    program.set_mat4(gl, "u_view_proj", &ctx.plan.camera.view_proj);
-    let passes = ctx.plan.stencil;
-    let (incr, decr) = ops(o.wrap, passes);
+}
+
+/// Counts each counting mode's parts: the face that increments (back faces under depth-fail,
+/// front faces under depth-pass) and the one that decrements, in two passes with culling or
+/// in one with glStencilOpSeparate; `draw` draws the parts of one counting mode.
+pub fn count(
+    gl: &glow::Context,
+    volumes: &LightVolumes<'_>,
+    passes: StencilPasses,
+    wrap: StencilWrap,
+    mut draw: impl FnMut(Counting),
+) {
+    let (incr, decr) = ops(wrap, passes);
     for counting in [Counting::ZFail, Counting::ZPass] {
         if !volumes.draws.iter().any(|d| d.counting == counting) {
             continue;
         }
-        // Which face increments: back faces under depth-fail, front faces under depth-pass.
         let (incr_face, decr_face) = match counting {
             Counting::ZFail => (glow::BACK, glow::FRONT),
             Counting::ZPass => (glow::FRONT, glow::BACK),
         };
-        // SAFETY: fixed-function state; draws our own buffers.
-        unsafe {
-            match passes {
-                StencilPasses::TwoPass => {
-                    gl.enable(glow::CULL_FACE);
-                    for (face, op) in [(incr_face, incr), (decr_face, decr)] {
-                        // Draw only `face`: cull the other one.
+        let faces = [(incr_face, incr), (decr_face, decr)];
+        match passes {
+            StencilPasses::TwoPass => {
+                for (face, op) in faces {
+                    let (sfail, dpfail, dppass) = face_op(counting, op);
+                    // SAFETY: fixed-function state: draw only `face`, cull the other.
+                    unsafe {
+                        gl.enable(glow::CULL_FACE);
                         gl.cull_face(if face == glow::BACK {
                             glow::FRONT
                         } else {
                             glow::BACK
                         });
-                        let (sfail, dpfail, dppass) = face_op(counting, op);
                         gl.stencil_op(sfail, dpfail, dppass);
-                        draw_parts(gl, program, volumes, counting, bounds);
                     }
+                    draw(counting);
                 }
-                StencilPasses::Separate => {
+            }
+            StencilPasses::Separate => {
+                // SAFETY: fixed-function state.
+                unsafe {
                     gl.disable(glow::CULL_FACE);
-                    for (face, op) in [(incr_face, incr), (decr_face, decr)] {
+                    for (face, op) in faces {
                         let (sfail, dpfail, dppass) = face_op(counting, op);
                         gl.stencil_op_separate(face, sfail, dpfail, dppass);
                     }
-                    draw_parts(gl, program, volumes, counting, bounds);
                 }
+                draw(counting);
             }
         }
     }
-    super::set_scissor(gl, light_scissor);
-    // SAFETY: state reset for the lit pass, which sets what it needs.
+}
+
+/// Resets what [`begin`] and [`count`] set, for the lit pass (which sets what it needs).
+pub fn end(gl: &glow::Context, o: &ShadowVolumeOptions) {
+    // SAFETY: fixed-function state; only what was enabled (ES may lack depth clamp).
     unsafe {
-        if let Some(ext) = bounds {
-            ext.disable(gl);
-        }
         gl.stencil_op(glow::KEEP, glow::KEEP, glow::KEEP);
         gl.disable(glow::POLYGON_OFFSET_FILL);
-        // Only what was enabled: ES may lack both switches (an error there).
         if o.projection == VolumeProjection::DepthClamp {
             gl.disable(glow::DEPTH_CLAMP);
-        }
-        if has_clip_distances(gl) {
-            for i in 0..MAX_PLANES as u32 {
-                gl.disable(glow::CLIP_DISTANCE0 + i);
-            }
         }
         gl.color_mask(true, true, true, true);
     }
