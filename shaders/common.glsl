@@ -9,13 +9,17 @@ bool q3_alpha_passes(int func, float alpha) {
     return true;
 }
 
+// scene::light::GRAZING_COSINE: a surface grazed closer than this receives nothing visible.
+const float GRAZING_COSINE = 1.0 / 512.0;
+
 // The receiver rule of scene/light.rs Light::reaches: within the radius, in the spot cone and on
-// the lit side of the surface. `cos_cutoff` is -1 for omni lights.
+// the lit side of the surface by more than GRAZING_COSINE. `cos_cutoff` is -1 for omni lights.
+
 bool light_reaches(vec3 p, vec3 n, vec3 light_pos, vec3 spot_dir, float cos_cutoff, float radius) {
     vec3 to_light = light_pos - p;
     float dist = length(to_light);
     if (!(dist > 0.0 && dist < radius)) return false;
-    if (dot(n, to_light) <= 0.0) return false;
+    if (dot(n, to_light) <= GRAZING_COSINE * dist) return false;
     if (cos_cutoff > -1.0 && dot(-to_light / dist, spot_dir) <= cos_cutoff) return false;
     return true;
 }

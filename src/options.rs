@@ -729,6 +729,12 @@ define_options! {
     group lighting: LightingOptions {
         /// Draw the per-light additive passes at all (off = only the unlit world).
         lights: bool = true;
+        /// Add each light to a pixel once: the lit pass marks the stencil where it adds and
+        /// passes only where no mark is. Quake 3 maps have planar surfaces whose own triangles
+        /// overlap (48 of the 58 OpenArena maps, `shadowlab inspect`'s
+        /// `overlapping_surfaces`); without marks the light is added twice there, in bands with
+        /// z-fighting edges (the paper's additive passes do that).
+        light_once: bool = true;
         /// Comma-separated light indices to draw, or `all`.
         only: String = "all".to_string();
         /// Per-light technique overrides, `index:technique` pairs separated by commas (e.g.
@@ -781,8 +787,11 @@ define_options! {
         offset_factor: f32 = 1.1, in 0.0 ..= 1000.0;
         /// glPolygonOffset units (thesis 2.2.8: 4).
         offset_units: f32 = 4.0, in 0.0 ..= 100000.0;
-        /// Growth per subsequent light (paper 3.1): light k uses the offset times (1 + growth k).
-        offset_growth: f32 = 1.0, in 0.0 ..= 100.0;
+        /// Growth per subsequent light: light k uses the offset times (1 + growth k). The paper
+        /// (3.1) grows it by 1; the default 0 keeps every light's offset the same, since each
+        /// light has its own map and nothing accumulates: with 161 lights the paper's growth
+        /// gives light 84 85 times the offset and erases its contact shadows (docs/checks.md).
+        offset_growth: f32 = 0.0, in 0.0 ..= 100.0;
         /// Which pass the offset applies to: the shadow map (thesis), the lit pass (paper), both.
         offset_pass: OffsetPass = OffsetPass::ShadowMap;
         /// Points outside a map's frustum: clamp to the edge (the artifact), range test, or

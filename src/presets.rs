@@ -51,6 +51,7 @@ const PAPER: &[(&str, &str)] = &[
     ("shadow_volume.extrusion", "infinite"),
     ("shadow_volume.projection", "infinite"),
     ("shadow_volume.shading", "additive"),
+    ("lighting.light_once", "false"),
 ];
 
 /// One option whose value differs from a preset's.
@@ -156,9 +157,12 @@ mod tests {
     }
 
     #[test]
-    fn the_paper_differs_from_the_defaults_in_the_planner_the_technique_and_the_casters() {
+    fn the_paper_differs_from_the_defaults_in_the_planner_the_technique_the_casters_the_offset_growth_and_the_light_marks()
+     {
         // Guards the claim in the options' docs that the other defaults are the paper's (the
-        // casters: the paper's one-sided faces lose shadows on open worlds, docs/checks.md).
+        // casters: the paper's one-sided faces lose shadows on open worlds; the offset growth
+        // erases later lights' contact shadows on maps with many lights; the light marks keep
+        // overlapping triangles from taking a light twice; docs/checks.md).
         let keys: Vec<String> = Preset::Paper
             .differences(&Options::default())
             .into_iter()
@@ -167,8 +171,10 @@ mod tests {
         assert_eq!(
             keys,
             [
+                "lighting.light_once",
                 "plan.enabled",
                 "shadow_map.cull",
+                "shadow_map.offset_growth",
                 "shadow_volume.casters",
                 "technique"
             ]

@@ -32,6 +32,7 @@ fn the_paper_preset_runs_the_papers_frame_on_oa_dm1() {
         "technique=shadow_volume",
         "shadow_volume.casters=front",
         "shadow_map.cull=front",
+        "shadow_map.offset_growth=1",
     ]));
     for mask in &preset.frame.masks {
         assert_eq!(

@@ -4,7 +4,9 @@
 
 mod common;
 
-use common::{load_scene_file, openarena_data, stdout_of, test_options};
+use common::{
+    load_asset, load_scene_file, openarena_data, options_with, render, stdout_of, test_options,
+};
 use shadowlab::gl::{Profile, Renderer, create_context};
 use shadowlab::options::BackendChoice;
 use shadowlab::q3::builder::SceneBuilder;
@@ -208,4 +210,38 @@ fn pvs_and_frustum_culling_cut_the_world_and_keep_the_view() {
     let all = common::render(&scene, &options);
     let (max, differing) = common::image_difference(&culled, &all);
     assert_eq!((max, differing), (0, 0));
+}
+
+/// oa_dm1's corridor floor (surface 521, one of the map's 62 planar surfaces whose own
+/// triangles overlap): the lit pass adds a light there once (`lighting.light_once`), where the
+/// paper's unmarked additive pass adds it twice in bands.
+#[test]
+fn a_light_is_added_once_where_a_surfaces_own_triangles_overlap() {
+    let (scene, _, _) = load_asset("assets/scenes/oa_dm1.toml");
+    let image = |extra: &[&str]| {
+        let mut sets = vec![
+            "lighting.baked=false",
+            "technique=none",
+            "lighting.only=1",
+            "width=640",
+            "height=400",
+        ];
+        sets.extend_from_slice(extra);
+        render(&scene, &options_with(&sets)).image
+    };
+    let unlit = image(&["lighting.lights=false"]);
+    let marked = image(&[]);
+    let unmarked = image(&["lighting.light_once=false"]);
+    let added = |img: &shadowlab::images::Rgba, i: usize| img.data[i] as i32 - unlit.data[i] as i32;
+    let (mut more, mut doubled) = (0, 0);
+    for i in (0..unlit.data.len()).step_by(4) {
+        let (once, twice) = (added(&marked, i), added(&unmarked, i));
+        // Marks only ever take a second addition away (1 level of rounding allowed).
+        more += (once > twice + 1) as usize;
+        // Twice the light, where the light is bright enough to tell (8 levels).
+        doubled += (once >= 8 && twice as f64 >= 1.7 * once as f64) as usize;
+    }
+    assert_eq!(more, 0);
+    // 4 022 such pixels at 1280x800, a quarter of that here.
+    assert!(doubled > 200, "{doubled}");
 }

@@ -368,11 +368,14 @@ fn back_faces_in_the_map_need_no_offset_on_closed_meshes() {
 }
 
 #[test]
-fn offsets_grow_per_light_and_can_go_to_the_lit_pass() {
+fn offsets_grow_per_light_under_the_paper_and_can_go_to_the_lit_pass() {
     use shadowlab::gl::passes::shadow_map::offset_for;
+    // The default keeps every light's offset; the paper's growth of 1 triples light 2's.
     let o = options_with(&[SM]).shadow_map;
     assert_eq!(offset_for(&o, 0), Some((1.1, 4.0)));
-    assert_eq!(offset_for(&o, 2), Some((1.1 * 3.0, 12.0)));
+    assert_eq!(offset_for(&o, 2), Some((1.1, 4.0)));
+    let paper = options_with(&[SM, "shadow_map.offset_growth=1"]).shadow_map;
+    assert_eq!(offset_for(&paper, 2), Some((1.1 * 3.0, 12.0)));
     let mut m = Measurer::new(builtin::default_scene(), &options_with(&[SM]));
     let lit_only = m
         .measure(&options_with(&[SM, "shadow_map.offset_pass=lit"]))

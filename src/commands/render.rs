@@ -153,9 +153,10 @@ fn probe(scene: &Scene, frame: &Frame, (x, y): (u32, u32)) -> Result<()> {
             )
         };
         println!(
-            "  light{} ({}): technique {:?}, {what}",
+            "  light{} ({}, at {:?}): technique {:?}, {what}",
             mask.light,
             light.name,
+            light.position.to_array(),
             mask.get(x, y)
         );
     }

@@ -3,6 +3,7 @@
 
 pub mod aabb;
 pub mod frustum;
+pub mod overlap;
 pub mod projection;
 
 pub use aabb::Aabb;

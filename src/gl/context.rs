@@ -156,34 +156,12 @@ impl GlContext {
         }
     }
 
-    /// Whether the legacy calls work here: glAlphaFunc has an address and calling it raises no
-    /// GL error (a core or ES context raises INVALID_OPERATION, or has no such function).
+    /// Whether the legacy calls work here: every one has an address and [`Legacy::check`]
+    /// passes (a core or ES context raises INVALID_OPERATION, or has no such function).
+    ///
+    /// [`Legacy::check`]: crate::gl::legacy::Legacy::check
     pub fn legacy_calls_work(&self) -> Result<(), String> {
-        use glow::HasContext;
-        type AlphaFunc = unsafe extern "system" fn(u32, f32);
-        const ALPHA_TEST: u32 = 0x0BC0;
-        let address = self.proc_address(c"glAlphaFunc");
-        if address.is_null() {
-            return Err("glAlphaFunc has no address".into());
-        }
-        // SAFETY: the address is glAlphaFunc's, whose signature is (GLenum, GLclampf); the
-        // context is current. The state set is restored to GL's defaults.
-        unsafe {
-            let alpha_func: AlphaFunc = std::mem::transmute(address);
-            while self.gl.get_error() != glow::NO_ERROR {}
-            alpha_func(glow::GREATER, 0.5);
-            self.gl.enable(ALPHA_TEST);
-            self.gl.disable(ALPHA_TEST);
-            let error = self.gl.get_error();
-            alpha_func(glow::ALWAYS, 0.0);
-            while self.gl.get_error() != glow::NO_ERROR {}
-            if error != glow::NO_ERROR {
-                return Err(format!(
-                    "glAlphaFunc / GL_ALPHA_TEST raised GL error 0x{error:x}"
-                ));
-            }
-        }
-        Ok(())
+        crate::gl::legacy::Legacy::load(|name| self.proc_address(name))?.check(&self.gl)
     }
 }
 

@@ -178,21 +178,29 @@ impl Legacy {
         legacy.ok_or_else(|| format!("the context lacks {}", missing.join(", ")))
     }
 
-    /// Calls one legacy command and reads the error flag: a core-profile context answers
-    /// INVALID_OPERATION, a compatibility profile nothing.
+    /// Sets the alpha function, toggles GL_ALPHA_TEST and reads the error flag: a core-profile
+    /// context answers INVALID_OPERATION or INVALID_ENUM, a compatibility profile nothing.
     pub fn check(&self, gl: &glow::Context) -> Result<(), String> {
         use glow::HasContext;
-        // SAFETY: the context is current; GEQUAL/0 is a valid alpha function.
+        const ALPHA_TEST: u32 = 0x0BC0;
+        // SAFETY: the context is current; the alpha function and test are left at GL's
+        // defaults.
         let error = unsafe {
             while gl.get_error() != glow::NO_ERROR {}
+            (self.alpha_func)(glow::GREATER, 0.5);
+            gl.enable(ALPHA_TEST);
+            gl.disable(ALPHA_TEST);
+            let error = gl.get_error();
             (self.alpha_func)(glow::ALWAYS, 0.0);
-            gl.get_error()
+            while gl.get_error() != glow::NO_ERROR {}
+            error
         };
         if error == glow::NO_ERROR {
             Ok(())
         } else {
             Err(format!(
-                "glAlphaFunc raised GL error 0x{error:x}: the context is not a compatibility profile"
+                "glAlphaFunc / GL_ALPHA_TEST raised GL error 0x{error:x}: the context is not a \
+                 compatibility profile"
             ))
         }
     }

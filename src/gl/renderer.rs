@@ -1078,6 +1078,9 @@ impl<'a> FrameRun<'a> {
             } else {
                 self.timer
                     .begin(self.ctx.gl, PassId::light(lp.light, Stage::Lit));
+                if self.ctx.options.lighting.light_once {
+                    passes::lit::clear_marks(self.ctx.gl);
+                }
                 let bindings = self.bindings(maps, pi);
                 match self.fixed {
                     Some(ff) => fixed_maps(&self.ctx, ff, lp, &bindings, false),

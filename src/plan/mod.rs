@@ -24,6 +24,17 @@ use crate::shadow::views::ShadowView;
 use crate::shadow::volume::{CasterGroups, Counting, PieceRef};
 use auto::CostMemory;
 use glam::{Mat3, Mat4, Vec3};
+
+/// `options` without the planner's decisions that change pixels by design (another shadow-map
+/// form: `plan.omni_cube`, `plan.wide_spot_omni`). Every other decision claims to change no
+/// mask pixel beyond the edge band; `shadowlab check` holds it to that by comparing this frame
+/// with the planner's off.
+pub fn without_pixel_changing_decisions(options: &Options) -> Options {
+    let mut o = options.clone();
+    o.plan.omni_cube = false;
+    o.plan.wide_spot_omni = false;
+    o
+}
 use scissor::Scissor;
 use serde::Serialize;
 

@@ -7,6 +7,7 @@ use super::builder::SceneBuilder;
 use super::entities::{self, Entity, EntityError, SpawnPoint};
 use super::patch::{self, PatchError};
 use super::pk3::{Vfs, VfsError};
+use crate::geometry::overlap::overlapping_triangles;
 use crate::images::Rgba;
 use crate::options::Q3Options;
 use crate::scene::vis::{BspTree, WorldVis};
@@ -77,6 +78,10 @@ pub struct MapCounts {
     pub drawn_triangles: usize,
     /// Triangles that cast shadows.
     pub caster_triangles: usize,
+    /// Drawn planar surfaces whose own triangles overlap, and those triangles: an additive lit
+    /// pass adds a light twice where they do (`geometry::overlap`).
+    pub overlapping_surfaces: usize,
+    pub overlapping_triangles: usize,
     pub patch_level: u32,
 }
 
@@ -354,6 +359,12 @@ impl Faces {
             return;
         }
         counts.drawn_triangles += g.indices.len() / 3;
+        if g.kind == SurfaceKind::Polygon {
+            let first = self.triangles.len() - g.indices.len() / 3;
+            let overlapping = overlapping_triangles(&self.triangles[first..]);
+            counts.overlapping_surfaces += (overlapping > 0) as usize;
+            counts.overlapping_triangles += overlapping;
+        }
         if m.casts_shadows {
             counts.caster_triangles += g.indices.len() / 3;
         }

@@ -3,7 +3,7 @@
 //! One [`MapCheck`] per map; a map that cannot be loaded or rendered says why instead.
 
 use crate::gl::{FrameRequest, Renderer};
-use crate::images::Mask;
+use crate::images::{Mask, MaskValue};
 use crate::options::{Options, Technique};
 use crate::scene::Scene;
 use crate::scene_file::{
@@ -26,6 +26,10 @@ pub struct MapCheck {
     /// Edges of the world's triangles with one triangle (open) and with more than two.
     pub open_edges: usize,
     pub non_manifold_edges: usize,
+    /// Planar world surfaces whose own triangles overlap, and those triangles: the lit pass
+    /// adds a light twice where they do (docs/checks.md).
+    pub overlapping_surfaces: usize,
+    pub overlapping_triangles: usize,
     pub lights: usize,
     /// `entities` (the map's light entities) or `placed` (one above each spawn point and item).
     pub light_source: &'static str,
@@ -58,6 +62,10 @@ pub struct PlannerDifference {
     pub differing_pixels: usize,
     /// Those outside the 1-pixel band around the reference's shadow boundaries.
     pub beyond_edge_band: usize,
+    /// The same with the decisions that change pixels by design turned off
+    /// ([`crate::plan::without_pixel_changing_decisions`]): what the conservative decisions
+    /// changed, which should be nothing.
+    pub conservative_beyond_edge_band: usize,
 }
 
 /// The scene `check` renders: `bsp` of the data set at `data`, the camera at the first spawn
@@ -108,6 +116,8 @@ fn describe(line: &mut MapCheck, scene: &Scene, report: LoadReport) {
         line.world_triangles = c.caster_triangles;
         line.open_edges = c.edges.open;
         line.non_manifold_edges = c.edges.non_manifold;
+        line.overlapping_surfaces = c.overlapping_surfaces;
+        line.overlapping_triangles = c.overlapping_triangles;
     }
     line.lights = scene.lights.len();
     line.light_source = if scene.lights.iter().any(|l| l.name.starts_with("placed")) {
@@ -127,20 +137,17 @@ fn measure_runs(
 ) -> Result<(), crate::gl::RenderError> {
     renderer.load_scene(scene)?;
     let mut exact = ExactMasks::default();
+    let request = FrameRequest {
+        masks: true,
+        ..FrameRequest::default()
+    };
     for technique in [Technique::ShadowMap, Technique::ShadowVolume] {
         let mut masks: Vec<Vec<Mask>> = Vec::new();
         for planner in [true, false] {
             let mut o = options.clone();
             o.technique = technique;
             o.plan.enabled = planner;
-            let frame = renderer.render_with(
-                scene,
-                &o,
-                FrameRequest {
-                    masks: true,
-                    ..FrameRequest::default()
-                },
-            )?;
+            let frame = renderer.render_with(scene, &o, request)?;
             let gbuffer = frame.gbuffer.as_ref().expect("masks were asked for");
             let m = exact.measure(scene, gbuffer, &frame.masks);
             let rates = m.total.rates();
@@ -154,8 +161,18 @@ fn measure_runs(
             });
             masks.push(frame.masks);
         }
-        line.planner
-            .push(planner_difference(technique, &masks[0], &masks[1], &exact));
+        // Those decisions are shadow-map forms: a volume frame is the planner's frame.
+        let conservative = if technique == Technique::ShadowVolume {
+            masks[0].clone()
+        } else {
+            let mut o = crate::plan::without_pixel_changing_decisions(options);
+            o.technique = technique;
+            renderer.render_with(scene, &o, request)?.masks
+        };
+        let mut d = planner_difference(technique, &masks[0], &masks[1], &exact);
+        d.conservative_beyond_edge_band =
+            planner_difference(technique, &conservative, &masks[1], &exact).beyond_edge_band;
+        line.planner.push(d);
     }
     Ok(())
 }
@@ -172,15 +189,18 @@ fn planner_difference(
         technique,
         differing_pixels: 0,
         beyond_edge_band: 0,
+        conservative_beyond_edge_band: 0,
     };
     for (a, b) in on.iter().zip(off) {
         let reference = exact.get(a.width, a.height, a.light);
         for (i, (x, y)) in a.values.iter().zip(&b.values).enumerate() {
-            if x == y {
+            let (px, py) = (i as u32 % a.width, i as u32 / a.width);
+            // Only receivers count, as in the error: elsewhere the mask decides nothing.
+            let receiver = reference.is_none_or(|r| r.get(px, py) != MaskValue::NotReceiver);
+            if x == y || !receiver {
                 continue;
             }
             d.differing_pixels += 1;
-            let (px, py) = (i as u32 % a.width, i as u32 / a.width);
             if !reference.is_some_and(|r| near_boundary(r, px, py)) {
                 d.beyond_edge_band += 1;
             }

@@ -28,6 +28,13 @@ pub struct Light {
 /// Fraction of the cutoff angle at which the cone edge starts to soften.
 pub const SPOT_INNER_FRACTION: f32 = 0.8;
 
+/// A surface the light grazes closer than this cosine (0.11°) is no receiver of it: its
+/// diffuse term is under half an 8-bit level of the light's colour, so shadowed and lit look
+/// the same, and the plane through the light that it lies in is where a shadow volume's sides
+/// and a shadow map's depths coincide with it and no rasterization decides exactly
+/// (`shadowlab check`'s planner differences on ctf_gate1 were all such pixels).
+pub const GRAZING_COSINE: f64 = 1.0 / 512.0;
+
 impl Light {
     pub fn spot(name: &str, position: Vec3, target: Vec3, cutoff_deg: f32, radius: f32) -> Light {
         Light {
@@ -53,14 +60,15 @@ impl Light {
     }
 
     /// Whether this light reaches a surface point with normal `n` at all: within its radius, in its
-    /// cone, and on the lit side of the surface. This decides "receiver" for masks and metrics.
+    /// cone, and on the lit side of the surface by more than [`GRAZING_COSINE`]. This decides
+    /// "receiver" for masks and metrics.
     pub fn reaches(&self, p: DVec3, n: DVec3) -> bool {
         let to_light = self.position.as_dvec3() - p;
         let dist = to_light.length();
         if !(dist > 0.0 && dist < self.radius as f64) {
             return false;
         }
-        if n.dot(to_light) <= 0.0 {
+        if n.dot(to_light) <= GRAZING_COSINE * dist * n.length() {
             return false;
         }
         match self.kind {
@@ -109,6 +117,15 @@ mod tests {
         assert!(!l.reaches(DVec3::new(60.0, 0.0, 0.0), up));
         // Facing away.
         assert!(!l.reaches(DVec3::ZERO, -up));
+    }
+
+    #[test]
+    fn a_surface_grazed_within_the_grazing_cosine_is_no_receiver() {
+        let l = Light::omni("o", Vec3::new(0.0, 0.0, 1.0), 1000.0);
+        // The light 1 unit above the plane z = 0: cosine 1/d at distance d.
+        let at = |d: f64| DVec3::new((d * d - 1.0).sqrt(), 0.0, 0.0);
+        assert!(l.reaches(at(500.0), DVec3::Z));
+        assert!(!l.reaches(at(520.0), DVec3::Z));
     }
 
     #[test]

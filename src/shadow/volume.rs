@@ -690,6 +690,53 @@ pub fn facing_flags_of(
     facing
 }
 
+/// Where a point light stands to a triangle's plane, for two-sided casting.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum LightSide {
+    /// On the side the triangle's normal points to.
+    Front,
+    /// On the other side: the triangle casts with the opposite winding.
+    Behind,
+    /// In its plane (within [`IN_PLANE`]), at a corner, or the triangle has no area: its
+    /// volume has no thickness and it casts none. Its edges to casting neighbours become
+    /// silhouettes, which keeps the shadow of a closed caster whose faces all hold the light
+    /// or face away from it (a light on its vertex or edge).
+    InPlane,
+}
+
+/// A light closer to a triangle's plane than this fraction of its distance to the centroid
+/// lies in the plane: f32 positions put a light meant to be on a tilted plane about 1e-7 of
+/// the coordinates off it, and either side's thin volume would then be right anyway; what
+/// must not happen is an exact zero read as one side, which turns a face that casts nothing
+/// into a neighbour that hides the silhouette.
+pub const IN_PLANE: f64 = 1e-9;
+
+/// [`LightSide`] of every triangle of `piece` (indexed by the group's triangles; others are
+/// `InPlane`), in f64.
+pub fn light_sides_of(group: &CasterGroup, piece: &Component, light: DVec3) -> Vec<LightSide> {
+    let c = &group.connectivity;
+    let pos = |i: u32| c.positions[i as usize].as_dvec3();
+    let mut sides = vec![LightSide::InPlane; c.triangles.len()];
+    for &t in &piece.triangles {
+        let tri = c.triangles[t as usize];
+        let plane = &c.planes[t as usize];
+        if plane.normal == DVec3::ZERO || tri.iter().any(|&v| pos(v) == light) {
+            continue;
+        }
+        let centroid = (pos(tri[0]) + pos(tri[1]) + pos(tri[2])) / 3.0;
+        let to_light = light - centroid;
+        let d = plane.normal.dot(to_light);
+        if d.abs() > IN_PLANE * to_light.length() {
+            sides[t as usize] = if d > 0.0 {
+                LightSide::Front
+            } else {
+                LightSide::Behind
+            };
+        }
+    }
+    sides
+}
+
 /// The same classification computed in f32 throughout, to find where single precision decides
 /// differently (lights on or near a triangle's plane, far from the origin).
 pub fn facing_flags_f32(
@@ -748,13 +795,14 @@ pub fn build_volume_of(
     let mut facing = facing_flags_of(group, comp, light, s.facing_epsilon);
     // Two-sided: the triangles facing away cast too, turned toward the light.
     let flipped: Option<Vec<bool>> = s.two_sided.then(|| {
-        let away: Vec<bool> = facing.iter().map(|f| !f).collect();
-        // Not those without area or with a corner at the light, which cast no volume.
-        let cast_either_way = facing_flags_of(group, comp, light, 1.0 + 1e-9);
+        let sides = light_sides_of(group, comp, light);
         for &t in &comp.triangles {
-            facing[t as usize] = cast_either_way[t as usize];
+            facing[t as usize] = sides[t as usize] != LightSide::InPlane;
         }
-        away
+        sides
+            .iter()
+            .map(|&side| side == LightSide::Behind)
+            .collect()
     });
     let (culled, scale) = match cull {
         Some(rc) => cull_to_receivers(c, comp, light, &rc, &mut facing),
@@ -1455,5 +1503,47 @@ mod tests {
         assert_eq!(count(true), 0);
         // One-sided (the paper): the turned half casts nothing.
         assert!(count(false) * 3 > hidden_points, "{}", count(false));
+    }
+
+    #[test]
+    fn a_light_on_a_cubes_vertex_or_edge_keeps_the_cubes_whole_shadow_when_casting_two_sided() {
+        let g = CasterGroup::build(
+            SurfaceOwner::World,
+            tris(&cuboid(Vec3::splat(-1.0), Vec3::splat(1.0), 1.0)),
+        );
+        let s = VolumeSettings {
+            two_sided: true,
+            // The winding test reads positions, not points at infinity.
+            extrusion: Extrusion::Finite,
+            finite_distance: 100.0,
+            ..settings(EdgeRule::Signed)
+        };
+        // Hidden: the segment to the light passes through the cube's inside.
+        let hidden = |p: DVec3, light: DVec3| {
+            (1..200).any(|k| {
+                let q = p + (light - p) * (k as f64 / 200.0);
+                q.abs().max_element() < 1.0 - 1e-6
+            })
+        };
+        for light in [DVec3::new(1.0, 1.0, 1.0), DVec3::new(0.0, 1.0, 1.0)] {
+            let sides = light_sides_of(&g, &g.components[0], light);
+            let in_plane = sides.iter().filter(|&&x| x == LightSide::InPlane).count();
+            assert_eq!(in_plane, if light.x == 0.0 { 4 } else { 6 }, "{light}");
+            assert!(sides.iter().all(|&x| x != LightSide::Front));
+            let v = build_volume_of(&g, &g.components[0], light, &s, true, None);
+            let mut wrong = 0;
+            let mut shadowed = 0;
+            for i in 0..21 {
+                for j in 0..21 {
+                    // A floor under the cube, off its planes and the light's.
+                    let p = DVec3::new(-5.03 + 0.5 * i as f64, -5.07 + 0.5 * j as f64, -4.0);
+                    let inside = winding(&v.vertices, p).abs() > 0.5;
+                    shadowed += inside as usize;
+                    wrong += (inside != hidden(p, light)) as usize;
+                }
+            }
+            assert!(shadowed > 50, "{light}: {shadowed}");
+            assert_eq!(wrong, 0, "{light}");
+        }
     }
 }

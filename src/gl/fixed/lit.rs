@@ -13,7 +13,7 @@
 use super::FixedFunction;
 use crate::gl::legacy::{self, Legacy};
 use crate::gl::passes::PassContext;
-use crate::gl::passes::lit::{LitShadow, ShadowBinding, finish, stencil_gate};
+use crate::gl::passes::lit::{LitShadow, ShadowBinding, finish, lit_stencil, stencil_gate};
 use crate::gl::passes::shadow_map::offset_for;
 use crate::gl::passes::state::DrawState;
 use crate::options::{AlphaTestFunc, CompareResult, OffsetPass, Outside};
@@ -292,9 +292,7 @@ pub fn draw(
         ..DrawState::OVER_DEPTH
     }
     .apply(gl);
-    if let LitShadow::Stencil { test: true } = shadow {
-        stencil_gate(gl, glow::EQUAL);
-    }
+    lit_stencil(gl, shadow, ctx.options.lighting.light_once);
     // SAFETY: fixed-function state of the current compatibility context.
     unsafe {
         gl.use_program(None);

@@ -156,6 +156,38 @@ pub fn stencil_gate(gl: &glow::Context, func: u32) {
     }
 }
 
+/// The lit pass's stencil state: under shadow volumes, add only where the count is 0; with
+/// `lighting.light_once`, also only where no earlier fragment of this light added, marking
+/// where this one does (the count is 0 there too, so one test does both). Under the fill
+/// shading the lit pass draws everywhere and the fill quad reads the counts: no marks.
+pub fn lit_stencil(gl: &glow::Context, shadow: &LitShadow, once: bool) {
+    match (shadow, once) {
+        (LitShadow::Stencil { test: false }, _) => {}
+        (_, true) => {
+            // SAFETY: fixed-function state.
+            unsafe {
+                gl.enable(glow::STENCIL_TEST);
+                gl.stencil_func(glow::EQUAL, 0, 0xff);
+                gl.stencil_op(glow::KEEP, glow::KEEP, glow::INCR);
+                gl.stencil_mask(0xff);
+            }
+        }
+        (LitShadow::Stencil { test: true }, false) => stencil_gate(gl, glow::EQUAL),
+        (_, false) => {}
+    }
+}
+
+/// Clears the stencil (within the scissor) before a light whose lit pass marks it and whose
+/// stencil no volume pass has just cleared.
+pub fn clear_marks(gl: &glow::Context) {
+    // SAFETY: fixed-function state and a clear of the bound target's stencil.
+    unsafe {
+        gl.stencil_mask(0xff);
+        gl.clear_stencil(0);
+        gl.clear(glow::STENCIL_BUFFER_BIT);
+    }
+}
+
 pub fn finish(gl: &glow::Context) {
     // SAFETY: state this pass enabled, switched off for the passes that do not set it.
     unsafe {
@@ -187,9 +219,7 @@ pub fn draw(
         ..DrawState::OVER_DEPTH
     }
     .apply(gl);
-    if let LitShadow::Stencil { test: true } = shadow {
-        stencil_gate(gl, glow::EQUAL);
-    }
+    lit_stencil(gl, shadow, ctx.options.lighting.light_once);
     bind_light(ctx, program, lp, shadow);
     draw_items(
         ctx,
