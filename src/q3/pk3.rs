@@ -95,11 +95,13 @@ pub struct Vfs {
     index: HashMap<String, Location>,
 }
 
-/// Lower-case with forward slashes: the key every lookup uses.
+/// Lower-case with forward slashes: the key every lookup uses. Idempotent (a key normalizes to
+/// itself), so that every listed name can be looked up: leading slashes and spaces are stripped
+/// together (an entry named `/ x` used to become ` x`, which no lookup could reach).
 pub fn normalize(name: &str) -> String {
-    name.trim()
-        .trim_start_matches(['/', '\\'])
-        .replace('\\', "/")
+    name.replace('\\', "/")
+        .trim_start_matches(|c: char| c == '/' || c.is_whitespace())
+        .trim_end()
         .to_ascii_lowercase()
 }
 
@@ -439,6 +441,15 @@ mod tests {
         let r = v.read("f.txt");
         assert!(r.is_err(), "{r:?}");
         std::fs::remove_dir_all(&d).ok();
+    }
+
+    #[test]
+    fn normalized_names_normalize_to_themselves() {
+        for name in ["/ x", "\\ \\Maps\\X.bsp ", " /a/b", "a", "", "/"] {
+            let key = normalize(name);
+            assert_eq!(normalize(&key), key, "{name:?}");
+        }
+        assert_eq!(normalize("/ Maps\\X.BSP"), "maps/x.bsp");
     }
 
     #[test]
