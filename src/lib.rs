@@ -6,6 +6,7 @@
 //! → reports.
 
 pub mod frame;
+pub mod fuzz_entry;
 pub mod geometry;
 pub mod gl;
 pub mod images;

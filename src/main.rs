@@ -32,6 +32,7 @@ enum Command {
     /// Regenerate the paper's figures and claims beside our measurements (index.html + .md).
     Reproduce(commands::reproduce::Args),
     /// Open the walkthrough viewer in a window (F1 for keys).
+    #[cfg(feature = "window")]
     View(commands::view::Args),
 }
 
@@ -48,6 +49,7 @@ fn main() {
         Command::Bench(a) => commands::bench::run(&cli.common, &a),
         Command::Check(a) => commands::check::run(&cli.common, &a),
         Command::Reproduce(a) => commands::reproduce::run(&cli.common, &a),
+        #[cfg(feature = "window")]
         Command::View(a) => commands::view::run(&cli.common, &a),
     };
     if let Err(e) = result {

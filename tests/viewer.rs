@@ -2,6 +2,7 @@
 //! switches techniques, shows volumes, walks through a frame, replays a camera path, saves
 //! screenshots and exits with status 0. The screenshots land in `docs/screenshots/` (the
 //! README shows them; those of OpenArena maps are not committed).
+#![cfg(feature = "window")]
 
 mod common;
 

@@ -1,10 +1,6 @@
-//! MD3 parsing, then placing frame 0 and assembling a player from three copies.
+//! See `shadowlab::fuzz_entry::md3` for what this target covers; `tests/fuzz_regressions.rs`
+//! replays its crash inputs through the same function.
 #![no_main]
 use libfuzzer_sys::fuzz_target;
-use shadowlab::q3::md3;
 
-fuzz_target!(|data: &[u8]| {
-    let Ok(m) = md3::parse(data) else { return };
-    let _ = md3::place_model(&m, 0, glam::Mat4::IDENTITY);
-    let _ = md3::assemble_player(&m, &m, &m, 0, 0);
-});
+fuzz_target!(|data: &[u8]| shadowlab::fuzz_entry::md3(data));

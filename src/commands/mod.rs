@@ -7,6 +7,7 @@ pub mod inspect;
 pub mod options;
 pub mod render;
 pub mod reproduce;
+#[cfg(feature = "window")]
 pub mod view;
 
 use anyhow::{Context, Result};

@@ -169,6 +169,8 @@ pub fn run(common: &CommonArgs, args: &Args) -> Result<()> {
         options,
         report,
     } = load(common, args.scene.as_deref())?;
+    // `ctx` is borrowed mutably only to show the frame in a window.
+    #[cfg_attr(not(feature = "window"), allow(unused_mut))]
     let (mut ctx, mut renderer) = start_gl(&options)?;
     renderer.load_scene(&scene)?;
     let probes: Vec<(u32, u32)> = args
@@ -187,6 +189,7 @@ pub fn run(common: &CommonArgs, args: &Args) -> Result<()> {
         }
     }
     let frame = renderer.render_with(&scene, &options, request)?;
+    #[cfg(feature = "window")]
     if let Some(window) = ctx.window() {
         // Show the frame too, proving the window path presents what it rendered.
         renderer.present_to_default(options.width, options.height);

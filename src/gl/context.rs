@@ -11,7 +11,9 @@
 //! step fails the error lists each one's reason. [`FAIL_BACKENDS_ENV`] makes named steps fail on
 //! purpose, so that each later step can be exercised on a machine where the first one works.
 
-use super::{egl, osmesa, window};
+#[cfg(feature = "window")]
+use super::window;
+use super::{egl, osmesa};
 use crate::options::BackendChoice;
 use std::ffi::{CStr, c_void};
 use std::fmt;
@@ -119,8 +121,13 @@ pub enum ContextError {
 
 /// What keeps each path's context alive; dropped after `gl`.
 enum Holder {
-    Egl { _keep: egl::EglHolder },
-    Osmesa { _keep: osmesa::OsMesaHolder },
+    Egl {
+        _keep: egl::EglHolder,
+    },
+    Osmesa {
+        _keep: osmesa::OsMesaHolder,
+    },
+    #[cfg(feature = "window")]
     Window(Box<window::WindowHolder>),
 }
 
@@ -139,6 +146,7 @@ pub struct GlContext {
 
 impl GlContext {
     /// The window and its event pump, when the context lives in one.
+    #[cfg(feature = "window")]
     pub fn window(&mut self) -> Option<&mut window::WindowHolder> {
         match &mut self.holder {
             Holder::Window(w) => Some(w),
@@ -152,6 +160,7 @@ impl GlContext {
         match &self.holder {
             Holder::Egl { _keep } => _keep.proc_address(name),
             Holder::Osmesa { _keep } => _keep.proc_address(name),
+            #[cfg(feature = "window")]
             Holder::Window(w) => w.window.proc_address(name),
         }
     }
@@ -221,6 +230,12 @@ fn try_osmesa(profile: Profile) -> Result<GlContext, String> {
     })
 }
 
+#[cfg(not(feature = "window"))]
+fn try_window(_: u32, _: u32, _: Profile) -> Result<GlContext, String> {
+    Err("built without the `window` feature".into())
+}
+
+#[cfg(feature = "window")]
 fn try_window(width: u32, height: u32, profile: Profile) -> Result<GlContext, String> {
     if profile == Profile::Compatibility {
         // Said rather than handing out a core context that would refuse the legacy calls.

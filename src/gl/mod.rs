@@ -18,6 +18,7 @@ pub mod timing;
 pub mod upload;
 pub mod volumes;
 pub mod walkthrough;
+#[cfg(feature = "window")]
 pub mod window;
 
 pub use context::{Backend, ContextError, GlApi, GlContext, Profile, create_context};

@@ -16,6 +16,10 @@ use thiserror::Error;
 
 /// Most quads per segment side accepted (Quake 3 never needs more than 16).
 pub const MAX_LEVEL: u32 = 64;
+/// Most vertices one patch may tessellate to. Quake 3's own grids stop at 65 × 65; this leaves
+/// room for high levels on big patches, but a 255 × 255 grid at level 64 (66 million vertices,
+/// gigabytes and tens of seconds) is refused instead of built.
+pub const MAX_VERTICES: usize = 1 << 20;
 
 #[derive(Debug, Error, PartialEq)]
 pub enum PatchError {
@@ -30,6 +34,15 @@ pub enum PatchError {
     },
     #[error("tessellation level {0} is outside 1..={MAX_LEVEL}")]
     BadLevel(u32),
+    #[error(
+        "patch {width}x{height} at level {level} makes {vertices} vertices, more than {MAX_VERTICES}"
+    )]
+    TooManyVertices {
+        width: usize,
+        height: usize,
+        level: u32,
+        vertices: usize,
+    },
 }
 
 /// One tessellated vertex (f64 evaluation rounded once to f32).
@@ -105,6 +118,17 @@ pub fn tessellate(
     let l = level as usize;
     let (seg_x, seg_y) = ((width - 1) / 2, (height - 1) / 2);
     let (columns, rows) = (seg_x * l + 1, seg_y * l + 1);
+    // Checked before anything is allocated: the sides and level are each bounded, their product
+    // is not.
+    let vertices = columns.saturating_mul(rows);
+    if vertices > MAX_VERTICES {
+        return Err(PatchError::TooManyVertices {
+            width,
+            height,
+            level,
+            vertices,
+        });
+    }
     let ctrl: Vec<[f64; 10]> = control.iter().map(attrs).collect();
     let mut vertices = Vec::with_capacity(columns * rows);
     for gy in 0..rows {
@@ -280,5 +304,19 @@ mod tests {
         ));
         assert_eq!(tessellate(&c, 3, 3, 0), Err(PatchError::BadLevel(0)));
         assert_eq!(tessellate(&c, 3, 3, 65), Err(PatchError::BadLevel(65)));
+    }
+
+    #[test]
+    fn a_grid_too_big_to_tessellate_is_refused_before_allocating() {
+        let c = vec![DrawVert::default(); 255 * 255];
+        assert!(matches!(
+            tessellate(&c, 255, 255, 64),
+            Err(PatchError::TooManyVertices {
+                vertices: 66_080_641,
+                ..
+            })
+        ));
+        // The largest grid Quake 3 builds (65 x 65 vertices) is far below the bound.
+        assert!(tessellate(&c[..33 * 33], 33, 33, 4).is_ok());
     }
 }

@@ -7,7 +7,7 @@
 
 use std::collections::HashMap;
 use std::fs::File;
-use std::io::{BufReader, Read};
+use std::io::{BufReader, Cursor, Read, Seek};
 use std::path::{Path, PathBuf};
 use std::sync::Mutex;
 use thiserror::Error;
@@ -64,10 +64,15 @@ pub enum VfsError {
     NoData(PathBuf),
 }
 
+/// What an archive is read from: a file, or bytes in memory (tests and fuzzing), through the
+/// same code.
+trait ZipInput: Read + Seek + Send {}
+impl<T: Read + Seek + Send> ZipInput for T {}
+
 enum Source {
     Zip {
         path: PathBuf,
-        archive: Mutex<ZipArchive<BufReader<File>>>,
+        archive: Mutex<ZipArchive<Box<dyn ZipInput>>>,
     },
     Dir {
         root: PathBuf,
@@ -90,11 +95,13 @@ pub struct Vfs {
     index: HashMap<String, Location>,
 }
 
-/// Lower-case with forward slashes: the key every lookup uses.
+/// Lower-case with forward slashes: the key every lookup uses. Idempotent (a key normalizes to
+/// itself), so that every listed name can be looked up: leading slashes and spaces are stripped
+/// together (an entry named `/ x` used to become ` x`, which no lookup could reach).
 pub fn normalize(name: &str) -> String {
-    name.trim()
-        .trim_start_matches(['/', '\\'])
-        .replace('\\', "/")
+    name.replace('\\', "/")
+        .trim_start_matches(|c: char| c == '/' || c.is_whitespace())
+        .trim_end()
         .to_ascii_lowercase()
 }
 
@@ -142,7 +149,16 @@ impl Vfs {
             path: path.to_path_buf(),
             source,
         })?;
-        let archive = ZipArchive::new(BufReader::new(file)).map_err(|e| VfsError::Zip {
+        self.add_archive(path, Box::new(BufReader::new(file)))
+    }
+
+    /// Adds an archive held in memory, named `label` in errors; it overrides like [`Vfs::add_pk3`].
+    pub fn add_pk3_bytes(&mut self, label: &Path, bytes: Vec<u8>) -> Result<(), VfsError> {
+        self.add_archive(label, Box::new(Cursor::new(bytes)))
+    }
+
+    fn add_archive(&mut self, path: &Path, input: Box<dyn ZipInput>) -> Result<(), VfsError> {
+        let archive = ZipArchive::new(input).map_err(|e| VfsError::Zip {
             archive: path.to_path_buf(),
             message: e.to_string(),
         })?;
@@ -271,7 +287,7 @@ impl Vfs {
 }
 
 fn read_entry(
-    archive: &mut ZipArchive<BufReader<File>>,
+    archive: &mut ZipArchive<Box<dyn ZipInput>>,
     entry: usize,
     path: &Path,
     name: &str,
@@ -298,7 +314,8 @@ fn read_entry(
             compressed,
         });
     }
-    let mut data = Vec::with_capacity(declared as usize);
+    // The declared size is bounded but may still lie: reserve at most 1 MiB ahead of the data.
+    let mut data = Vec::with_capacity(declared.min(1 << 20) as usize);
     // Never trust the header: read at most one byte more than declared.
     file.take(declared + 1)
         .read_to_end(&mut data)
@@ -423,6 +440,40 @@ mod tests {
         v.add_pk3(&d.join("a.pk3")).unwrap();
         let r = v.read("f.txt");
         assert!(r.is_err(), "{r:?}");
+        std::fs::remove_dir_all(&d).ok();
+    }
+
+    #[test]
+    fn normalized_names_normalize_to_themselves() {
+        for name in ["/ x", "\\ \\Maps\\X.bsp ", " /a/b", "a", "", "/"] {
+            let key = normalize(name);
+            assert_eq!(normalize(&key), key, "{name:?}");
+        }
+        assert_eq!(normalize("/ Maps\\X.BSP"), "maps/x.bsp");
+    }
+
+    #[test]
+    fn archives_in_memory_read_like_files() {
+        let d = temp("memory");
+        write_pk3(
+            &d.join("a.pk3"),
+            &[("maps/X.bsp", b"ibsp"), ("../up.txt", b"up")],
+        );
+        let mut v = Vfs::new();
+        v.add_pk3_bytes(
+            Path::new("mem.pk3"),
+            std::fs::read(d.join("a.pk3")).unwrap(),
+        )
+        .unwrap();
+        assert_eq!(v.read("maps/x.bsp").unwrap(), b"ibsp");
+        assert_eq!(v.origin("maps/x.bsp").unwrap(), Path::new("mem.pk3"));
+        // A climbing name is only a key: it reads its own entry and nothing outside.
+        assert_eq!(v.read("../up.txt").unwrap(), b"up");
+        assert!(matches!(v.read("up.txt"), Err(VfsError::NotFound(_))));
+        assert!(matches!(
+            Vfs::new().add_pk3_bytes(Path::new("junk.pk3"), b"PK\x05\x06".to_vec()),
+            Err(VfsError::Zip { .. })
+        ));
         std::fs::remove_dir_all(&d).ok();
     }
 

@@ -205,7 +205,12 @@ impl SceneFile {
             path: path.to_path_buf(),
             source,
         })?;
-        let mut f: SceneFile = toml::from_str(&text).map_err(|e| SceneFileError::Toml {
+        SceneFile::parse(&text, path)
+    }
+
+    /// Parses a scene file's text; `path` names it in errors and anchors its relative paths.
+    pub fn parse(text: &str, path: &Path) -> Result<SceneFile, SceneFileError> {
+        let mut f: SceneFile = toml::from_str(text).map_err(|e| SceneFileError::Toml {
             path: path.to_path_buf(),
             message: e.to_string(),
         })?;
