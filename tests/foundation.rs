@@ -135,7 +135,7 @@ fn info_json_reports_the_egl_path_and_each_missing_feature_as_a_fallback() {
         .count();
     assert_eq!(missing, fallbacks.len());
     // No options given: the defaults, which differ from the paper's frame in the planner, the
-    // technique and the casters (both faces) only.
+    // technique, the casters (both faces), the offset growth and the light marks only.
     assert_eq!(v["preset"], "default");
     let differs: Vec<&str> = v["differs_from_paper"]
         .as_array()
@@ -146,8 +146,10 @@ fn info_json_reports_the_egl_path_and_each_missing_feature_as_a_fallback() {
     assert_eq!(
         differs,
         [
+            "lighting.light_once",
             "plan.enabled",
             "shadow_map.cull",
+            "shadow_map.offset_growth",
             "shadow_volume.casters",
             "technique"
         ]
