@@ -835,7 +835,8 @@ define_options! {
         projection: VolumeProjection = VolumeProjection::Infinite;
         /// Draw volumes with glPolygonOffset(0, 1) away from the camera (Doom 3).
         depth_offset: bool = false;
-        /// Forsyth's fix for chopped Gouraud shading: a triangle faces the light when N.L > -eps.
+        /// Forsyth's fix for chopped Gouraud shading: a triangle faces the light when N.L > -eps
+        /// (with `casters = front`; two-sided casting casts every triangle either way).
         facing_epsilon: f32 = 0.0, in 0.0 ..= 1.0;
         /// Additive lit pass where stencil = 0 (paper) or Bestimt and Freitag's fill quad.
         shading: VolumeShading = VolumeShading::Additive;
