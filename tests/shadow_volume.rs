@@ -328,7 +328,6 @@ fn two_pass_and_separate_stencil_give_identical_masks() {
 fn projections_offsets_and_shading_variants_agree() {
     let mut m = Measurer::new(builtin::default_scene(), &options_with(&[SV]));
     let base = m.measure(&options_with(&[SV]));
-    let same = |r: &common::Measured| (0..2).all(|l| differing(r.mask(l), base.mask(l)) == 0);
     let near_same = |r: &common::Measured| (0..2).all(|l| differing(r.mask(l), base.mask(l)) < 200);
     for set in [
         "shadow_volume.projection=infinite_epsilon",
