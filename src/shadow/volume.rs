@@ -675,19 +675,28 @@ pub fn facing_flags_of(
     epsilon: f32,
 ) -> Vec<bool> {
     let c = &group.connectivity;
-    let pos = |i: u32| c.positions[i as usize].as_dvec3();
     let mut facing = vec![false; c.triangles.len()];
     for &t in &piece.triangles {
-        let tri = c.triangles[t as usize];
-        let plane = &c.planes[t as usize];
-        if plane.normal == DVec3::ZERO || tri.iter().any(|&v| pos(v) == light) {
-            continue;
+        if let Some((d, distance)) = light_offset(c, t, light) {
+            facing[t as usize] = d > -(epsilon as f64) * distance;
         }
-        let centroid = (pos(tri[0]) + pos(tri[1]) + pos(tri[2])) / 3.0;
-        let to_light = light - centroid;
-        facing[t as usize] = plane.normal.dot(to_light) > -(epsilon as f64) * to_light.length();
     }
     facing
+}
+
+/// The light's signed distance from triangle `t`'s plane and its distance from the centroid,
+/// in f64; None for a triangle without area or with a corner at the light, which never faces
+/// it and casts nothing.
+fn light_offset(c: &Connectivity, t: u32, light: DVec3) -> Option<(f64, f64)> {
+    let pos = |i: u32| c.positions[i as usize].as_dvec3();
+    let tri = c.triangles[t as usize];
+    let plane = &c.planes[t as usize];
+    if plane.normal == DVec3::ZERO || tri.iter().any(|&v| pos(v) == light) {
+        return None;
+    }
+    let centroid = (pos(tri[0]) + pos(tri[1]) + pos(tri[2])) / 3.0;
+    let to_light = light - centroid;
+    Some((plane.normal.dot(to_light), to_light.length()))
 }
 
 /// Where a point light stands to a triangle's plane, for two-sided casting.
@@ -715,23 +724,17 @@ pub const IN_PLANE: f64 = 1e-9;
 /// `InPlane`), in f64.
 pub fn light_sides_of(group: &CasterGroup, piece: &Component, light: DVec3) -> Vec<LightSide> {
     let c = &group.connectivity;
-    let pos = |i: u32| c.positions[i as usize].as_dvec3();
     let mut sides = vec![LightSide::InPlane; c.triangles.len()];
     for &t in &piece.triangles {
-        let tri = c.triangles[t as usize];
-        let plane = &c.planes[t as usize];
-        if plane.normal == DVec3::ZERO || tri.iter().any(|&v| pos(v) == light) {
-            continue;
-        }
-        let centroid = (pos(tri[0]) + pos(tri[1]) + pos(tri[2])) / 3.0;
-        let to_light = light - centroid;
-        let d = plane.normal.dot(to_light);
-        if d.abs() > IN_PLANE * to_light.length() {
-            sides[t as usize] = if d > 0.0 {
-                LightSide::Front
-            } else {
-                LightSide::Behind
-            };
+        match light_offset(c, t, light) {
+            Some((d, distance)) if d.abs() > IN_PLANE * distance => {
+                sides[t as usize] = if d > 0.0 {
+                    LightSide::Front
+                } else {
+                    LightSide::Behind
+                };
+            }
+            _ => {}
         }
     }
     sides
