@@ -161,17 +161,17 @@ fn measure_runs(
             });
             masks.push(frame.masks);
         }
+        let mut d = planner_difference(technique, &masks[0], &masks[1], &exact);
         // Those decisions are shadow-map forms: a volume frame is the planner's frame.
-        let conservative = if technique == Technique::ShadowVolume {
-            masks[0].clone()
+        d.conservative_beyond_edge_band = if technique == Technique::ShadowVolume {
+            d.beyond_edge_band
         } else {
             let mut o = crate::plan::without_pixel_changing_decisions(options);
             o.technique = technique;
-            renderer.render_with(scene, &o, request)?.masks
+            o.plan.enabled = true;
+            let conservative = renderer.render_with(scene, &o, request)?.masks;
+            planner_difference(technique, &conservative, &masks[1], &exact).beyond_edge_band
         };
-        let mut d = planner_difference(technique, &masks[0], &masks[1], &exact);
-        d.conservative_beyond_edge_band =
-            planner_difference(technique, &conservative, &masks[1], &exact).beyond_edge_band;
         line.planner.push(d);
     }
     Ok(())
