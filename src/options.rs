@@ -725,6 +725,24 @@ define_options! {
         wide_spot_omni: bool = true;
     }
 
+    /// The sampled reference (`truth::sampled`): each frame, per light, a few receiver pixels
+    /// traced exactly and compared with the technique's decision there. It needs the frame's
+    /// G-buffer and masks, drawn after the timed frame. Read by `bench` (the per-frame error
+    /// along a path), `render --stats`, the viewer's overlay and `auto`'s measured choice.
+    group estimate: EstimateOptions {
+        /// Receiver pixels traced per light and frame (0: none). With 512, a light's 95%
+        /// interval is about ±2 points at 10% error and under 0.75% when nothing is wrong.
+        samples: u32 = 512, in 0 ..= 1048576;
+        /// Seed of the sample positions: the same seed, frame and light draw the same pixels.
+        seed: u32 = 1;
+        /// Frames pooled into a light's running estimate (the viewer's overlay, `auto`).
+        window: u32 = 8, in 1 ..= 4096;
+        /// `auto` leaves a light's measured technique for another that meets `accuracy` only
+        /// when that one is cheaper by more than this share of the current one's time, so that
+        /// noise in the pass times does not flip it back and forth.
+        hysteresis: f32 = 0.25, in 0.0 ..= 1.0;
+    }
+
     /// Lights and the unshadowed lighting model.
     group lighting: LightingOptions {
         /// Draw the per-light additive passes at all (off = only the unlit world).

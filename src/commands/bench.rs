@@ -105,6 +105,9 @@ pub fn run(common: &CommonArgs, args: &Args) -> Result<()> {
     };
     let rows = Bench::new(&mut renderer, &scene, settings).run(&configs)?;
     println!("{}", table::markdown(&rows));
+    if rows.iter().any(|r| r.sampled.is_some()) {
+        println!("{}", table::path_error_table(&rows).to_markdown());
+    }
     if let Some(json) = &args.json {
         std::fs::write(json, serde_json::to_string_pretty(&rows)?)
             .with_context(|| format!("cannot write {}", json.display()))?;

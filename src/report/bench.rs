@@ -3,9 +3,10 @@
 //! Each configuration renders `warmup` frames, then `frames` measured frames along the camera path
 //! (cycled), round-robin with the other configurations (`BenchSettings::interleave`) or one after
 //! another. Its frame time is reported absolutely and as a ratio to the same options with shadows
-//! off (technique = none), measured in the same run. Its error is measured once, on the path's
-//! first frame, against the exact reference (which is computed once per view and light and
-//! reused by every configuration).
+//! off (technique = none), measured in the same run. Its error is measured on the path's first
+//! frame against the exact reference (computed once per view and light and reused by every
+//! configuration), and on every frame of the path against the sampled reference
+//! (`truth::sampled`, `estimate.samples` pixels per light), in an untimed pass after the timing.
 
 use crate::frame::CacheStats;
 use crate::frame::Frame;
@@ -18,10 +19,12 @@ use crate::plan::volume_draws::VolumeStats;
 use crate::presets::{Difference, Preset};
 use crate::scene::Scene;
 use crate::scene::path::PathKey;
+use crate::truth::sampled::{FrameSample, Interval, sample_frame};
 use crate::truth::{Counts, ExactMasks};
 use indicatif::{ProgressBar, ProgressStyle};
 use serde::Serialize;
 use std::collections::{BTreeMap, HashMap};
+use std::time::Instant;
 
 /// Frames timed pass by pass for each configuration's breakdown (after its measured frames).
 pub const PASS_FRAMES: usize = 3;
@@ -200,6 +203,67 @@ pub struct BenchRow {
     pub cache: CacheStats,
     /// Options the GL could not run (or `gl.disable` hid), and what replaced them.
     pub fallbacks: Vec<Fallback>,
+    /// The sampled reference on every measured frame of the path (None with shadows off or
+    /// `estimate.samples = 0`).
+    pub sampled: Option<SampledPath>,
+}
+
+/// One frame of the path against the sampled reference.
+#[derive(Debug, Clone, Serialize)]
+pub struct SampledFrame {
+    /// Index into the path.
+    pub frame: usize,
+    /// The error over every light's receivers, with its 95% interval.
+    pub error: Interval,
+    /// Shadow rays traced.
+    pub rays: usize,
+}
+
+/// The sampled reference along the path, and what it cost.
+#[derive(Debug, Clone, Serialize)]
+pub struct SampledPath {
+    /// Pixels traced per light and frame.
+    pub samples_per_light: u32,
+    pub frames: Vec<SampledFrame>,
+    /// Median and largest per-frame error (fractions).
+    pub median: f64,
+    pub max: f64,
+    /// Median milliseconds per frame to draw and read the G-buffer and masks (after the frame).
+    pub masks_ms: f64,
+    /// Median milliseconds per frame to trace the samples (rayon, every core).
+    pub trace_ms: f64,
+    /// `masks_ms + trace_ms` over the configuration's median frame time.
+    pub share_of_frame: f64,
+}
+
+impl SampledPath {
+    fn new(samples: u32, frames: Vec<(FrameSample, f64, f64)>, frame_ms: f64) -> SampledPath {
+        let mut errors: Vec<f64> = frames.iter().map(|f| f.0.total.value).collect();
+        let mut masks: Vec<f64> = frames.iter().map(|f| f.1).collect();
+        let mut trace: Vec<f64> = frames.iter().map(|f| f.2).collect();
+        let (masks_ms, trace_ms) = (median(&mut masks), median(&mut trace));
+        SampledPath {
+            samples_per_light: samples,
+            max: errors.iter().copied().fold(0.0, f64::max),
+            median: median(&mut errors),
+            frames: frames
+                .into_iter()
+                .enumerate()
+                .map(|(i, (f, _, _))| SampledFrame {
+                    frame: i,
+                    error: f.total,
+                    rays: f.rays,
+                })
+                .collect(),
+            masks_ms,
+            trace_ms,
+            share_of_frame: if frame_ms > 0.0 {
+                (masks_ms + trace_ms) / frame_ms
+            } else {
+                0.0
+            },
+        }
+    }
 }
 
 /// Sums per-light passes into `lights.<stage>` entries, next to the passes themselves.
@@ -428,6 +492,49 @@ impl<'a> Bench<'a> {
         })
     }
 
+    /// Every measured frame of the path with `options`, its masks drawn (untimed) and sampled:
+    /// the error along the path and, per frame, milliseconds of masks and of tracing.
+    fn sample_path(
+        &mut self,
+        options: &Options,
+    ) -> Result<Vec<(FrameSample, f64, f64)>, RenderError> {
+        let n = options.estimate.samples as usize;
+        let seed = u64::from(options.estimate.seed);
+        let mut out = Vec::with_capacity(self.settings.frames);
+        for i in 0..self.settings.frames.max(1) {
+            let camera = self.settings.path[i % self.settings.path.len()].apply(&self.scene.camera);
+            let start = Instant::now();
+            let frame = self.renderer.render_at(
+                self.scene,
+                &camera,
+                options,
+                FrameRequest {
+                    masks: true,
+                    frame_only: true,
+                    ..FrameRequest::default()
+                },
+            )?;
+            let masks_ms = (start.elapsed().as_secs_f64() * 1e3 - frame.frame_ms).max(0.0);
+            let gbuffer = frame
+                .gbuffer
+                .as_ref()
+                .ok_or(RenderError::Gl("the renderer returned no G-buffer".into()))?;
+            let reference = self.exact.reference(self.scene);
+            let start = Instant::now();
+            let s = sample_frame(
+                reference,
+                gbuffer,
+                &self.scene.lights,
+                &frame.masks,
+                n,
+                seed,
+                i as u64,
+            );
+            out.push((s, masks_ms, start.elapsed().as_secs_f64() * 1e3));
+        }
+        Ok(out)
+    }
+
     /// Error of `options` on the first frame of the path, with that frame's volume stats.
     fn error(&mut self, options: &Options) -> Result<FrameError, RenderError> {
         let c = self.capture(options)?;
@@ -500,6 +607,18 @@ impl<'a> Bench<'a> {
                 fallbacks,
             } = self.error(&c.options)?;
             let frame_ms = stats(&m.frame_ms);
+            let sampled =
+                if c.options.technique != Technique::None && c.options.estimate.samples > 0 {
+                    bar.set_message(format!("{}: sampled reference along the path", c.label()));
+                    let frames = self.sample_path(&c.options)?;
+                    Some(SampledPath::new(
+                        c.options.estimate.samples,
+                        frames,
+                        frame_ms.median,
+                    ))
+                } else {
+                    None
+                };
             rows.push(BenchRow {
                 scene: self.scene.name.clone(),
                 technique: c.options.technique.to_string(),
@@ -534,6 +653,7 @@ impl<'a> Bench<'a> {
                 plan,
                 cache,
                 fallbacks,
+                sampled,
             });
             bar.inc(1);
         }

@@ -123,6 +123,14 @@ pub fn bench_table(rows: &[BenchRow]) -> Table {
         ("error %".to_string(), Align::Right),
         ("error % excl. boundary".to_string(), Align::Right),
     ];
+    let sampled = rows.iter().any(|r| r.sampled.is_some());
+    if sampled {
+        header.push((
+            "path error % (sampled median, max)".to_string(),
+            Align::Right,
+        ));
+        header.push(("sampling ms (masks + rays)".to_string(), Align::Right));
+    }
     header.extend(stages.iter().map(|s| (format!("{s} ms"), Align::Right)));
     let mut t = Table {
         header,
@@ -138,6 +146,15 @@ pub fn bench_table(rows: &[BenchRow]) -> Table {
             format!("{:.3}", 100.0 * r.error.total),
             format!("{:.3}", 100.0 * r.error.total_excl_boundary),
         ];
+        if sampled {
+            match &r.sampled {
+                Some(p) => {
+                    row.push(format!("{:.3}, {:.3}", 100.0 * p.median, 100.0 * p.max));
+                    row.push(format!("{:.1} + {:.1}", p.masks_ms, p.trace_ms));
+                }
+                None => row.extend(["–".to_string(), "–".to_string()]),
+            }
+        }
         row.extend(stages.iter().map(|st| match r.pass_ms.get(st) {
             Some(ms) => format!("{ms:.2}"),
             None => "–".to_string(),
@@ -151,6 +168,56 @@ pub fn bench_table(rows: &[BenchRow]) -> Table {
             r.height,
             r.frames,
             clock_name(&r.clock)
+        )
+    });
+    t
+}
+
+/// The sampled error of every configuration on every frame of the path: the estimate and its
+/// 95% interval, in percent.
+pub fn path_error_table(rows: &[BenchRow]) -> Table {
+    let sampled: Vec<&BenchRow> = rows.iter().filter(|r| r.sampled.is_some()).collect();
+    let mut header = vec![("frame".to_string(), Align::Right)];
+    header.extend(
+        sampled
+            .iter()
+            .map(|r| (format!("{} error %", r.label), Align::Right)),
+    );
+    let mut t = Table {
+        header,
+        ..Table::default()
+    };
+    let frames = sampled
+        .iter()
+        .filter_map(|r| r.sampled.as_ref().map(|p| p.frames.len()))
+        .max()
+        .unwrap_or(0);
+    for i in 0..frames {
+        let mut row = vec![i.to_string()];
+        for r in &sampled {
+            let cell = r
+                .sampled
+                .as_ref()
+                .and_then(|p| p.frames.get(i))
+                .map(|f| {
+                    let e = f.error;
+                    format!(
+                        "{:.3} [{:.3}, {:.3}]",
+                        100.0 * e.value,
+                        100.0 * e.low,
+                        100.0 * e.high
+                    )
+                })
+                .unwrap_or_else(|| "–".to_string());
+            row.push(cell);
+        }
+        t.push(row);
+    }
+    t.note = sampled.first().and_then(|r| r.sampled.as_ref()).map(|p| {
+        format!(
+            "Sampled reference: {} receiver pixels per light and frame, traced exactly; \
+             brackets hold the 95% interval (Wilson, on the effective sample size).",
+            p.samples_per_light
         )
     });
     t

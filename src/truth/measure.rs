@@ -98,6 +98,12 @@ impl ExactMasks {
         })
     }
 
+    /// The reference, built on first use.
+    pub fn reference(&mut self, scene: &Scene) -> &Reference {
+        self.reference
+            .get_or_insert_with(|| Reference::build(scene))
+    }
+
     /// The exact mask of light `light` for frames of `width` x `height`, once measured.
     pub fn get(&self, width: u32, height: u32, light: usize) -> Option<&Mask> {
         self.masks.get(&(width, height, light))

@@ -5,6 +5,7 @@ pub mod masks;
 pub mod measure;
 pub mod metrics;
 pub mod reference;
+pub mod sampled;
 
 pub use masks::{Tracing, reference_mask};
 pub use measure::{ExactMasks, Measurement, exact_mask, measure, measure_with};

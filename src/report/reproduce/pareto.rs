@@ -206,6 +206,7 @@ mod tests {
                 ..ErrorRow::default()
             },
             error_per_light: Vec::new(),
+            sampled: None,
             volumes: Vec::new(),
             plan: Default::default(),
             cache: Default::default(),

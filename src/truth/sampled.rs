@@ -1,0 +1,365 @@
+//! The sampled reference: each frame, per light, a few hundred receiver pixels traced exactly and
+//! compared with the technique's decision there, instead of every pixel.
+//!
+//! The population is the one the full comparison ([`super::compare`]) rates: pixels that the
+//! rendered mask and the reference both count as receivers of the light. Its pixels are taken in
+//! 16×16 tiles, row by row, and cut into `n` strata of equal length (±1); one pixel is drawn
+//! uniformly from each stratum, so the samples spread over the light's part of the screen and
+//! every pixel is equally likely (up to the ±1). A stratum whose pixel the reference does not
+//! count as a receiver (a receiver mismatch, left out of the rates) drops out.
+//!
+//! The estimate is the weighted share of sampled pixels whose decision differs from the exact
+//! one (each weighted by its stratum's length). Its 95% interval is Wilson's score interval on
+//! Kish's effective sample size; stratification only narrows the real spread, so the interval is
+//! conservative. With as many samples as pixels, every pixel is traced and the interval closes.
+
+use super::reference::{Reference, shadow_ray_origin};
+use crate::images::{GBuffer, Mask, MaskValue};
+use crate::scene::Light;
+use glam::Vec3;
+use rayon::prelude::*;
+use serde::Serialize;
+
+/// Side of the square tiles the strata follow.
+const TILE: u32 = 16;
+
+/// Standard normal quantile of the 95% two-sided interval.
+const Z95: f64 = 1.959_964;
+
+/// A share with its 95% interval.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Serialize)]
+pub struct Interval {
+    /// The estimate, a fraction.
+    pub value: f64,
+    pub low: f64,
+    pub high: f64,
+}
+
+impl Interval {
+    /// Wilson's score interval for share `p` observed on `n` (effective) samples; exact (closed)
+    /// when `exact`, empty-sample intervals span everything.
+    pub fn wilson(p: f64, n: f64, exact: bool) -> Interval {
+        if exact {
+            return Interval {
+                value: p,
+                low: p,
+                high: p,
+            };
+        }
+        if n <= 0.0 {
+            return Interval {
+                value: p,
+                low: 0.0,
+                high: 1.0,
+            };
+        }
+        let z2 = Z95 * Z95;
+        let denom = 1.0 + z2 / n;
+        let centre = (p + z2 / (2.0 * n)) / denom;
+        let half = Z95 * (p * (1.0 - p) / n + z2 / (4.0 * n * n)).sqrt() / denom;
+        Interval {
+            value: p,
+            low: (centre - half).max(0.0),
+            high: (centre + half).min(1.0),
+        }
+    }
+
+    /// Whether `x` lies in the interval (with a little room for rounding).
+    pub fn holds(&self, x: f64) -> bool {
+        x >= self.low - 1e-12 && x <= self.high + 1e-12
+    }
+}
+
+/// One light's sampled error in one frame.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Serialize)]
+pub struct LightSample {
+    pub light: usize,
+    /// Pixels both the mask and the reference count as receivers (estimated from the samples
+    /// where some were mismatches).
+    pub receivers: f64,
+    /// Receiver pixels traced.
+    pub samples: usize,
+    /// Kish's effective sample size of the weighted samples.
+    pub effective: f64,
+    /// Whether every receiver pixel was traced.
+    pub exact: bool,
+    pub error: Interval,
+}
+
+/// A frame's sampled error: per light, and over every light's receiver pixels.
+#[derive(Debug, Clone, Default, PartialEq, Serialize)]
+pub struct FrameSample {
+    pub per_light: Vec<LightSample>,
+    pub total: Interval,
+    /// Shadow rays traced.
+    pub rays: usize,
+}
+
+/// The pixel of each stratum: `n` strata over `pixels` (in tile order), one uniform pick in each,
+/// with the stratum's length as weight. Every pixel when `n` covers them all.
+fn stratified(pixels: &[u32], n: usize, rng: &mut fastrand::Rng) -> Vec<(u32, f64)> {
+    let m = pixels.len();
+    if n == 0 || m == 0 {
+        return Vec::new();
+    }
+    if n >= m {
+        return pixels.iter().map(|&p| (p, 1.0)).collect();
+    }
+    (0..n)
+        .map(|k| {
+            let (start, end) = (k * m / n, (k + 1) * m / n);
+            (pixels[rng.usize(start..end)], (end - start) as f64)
+        })
+        .collect()
+}
+
+/// The mask's receiver pixels (row-major indices) in tile order.
+fn receivers_in_tile_order(mask: &Mask) -> Vec<u32> {
+    let (w, h) = (mask.width, mask.height);
+    let mut out = Vec::new();
+    for ty in (0..h).step_by(TILE as usize) {
+        for tx in (0..w).step_by(TILE as usize) {
+            for y in ty..(ty + TILE).min(h) {
+                for x in tx..(tx + TILE).min(w) {
+                    let i = y * w + x;
+                    if mask.values[i as usize] != MaskValue::NotReceiver as u8 {
+                        out.push(i);
+                    }
+                }
+            }
+        }
+    }
+    out
+}
+
+/// The random stream of light `light` in frame `frame`: the same seed, frame and light give the
+/// same samples; each frame and light its own.
+pub fn stream(seed: u64, frame: u64, light: usize) -> fastrand::Rng {
+    let mix = seed
+        .wrapping_mul(0x9E37_79B9_7F4A_7C15)
+        .wrapping_add(frame.wrapping_mul(0xC2B2_AE3D_27D4_EB4F))
+        .wrapping_add((light as u64).wrapping_mul(0x1656_67B1_9E37_79F9));
+    fastrand::Rng::with_seed(mix)
+}
+
+/// What the exact reference says at pixel `i`: `None` where the light does not reach it.
+fn exact_at(reference: &Reference, gbuffer: &GBuffer, light: &Light, i: usize) -> Option<bool> {
+    if !gbuffer.is_receiver_surface(i) {
+        return None;
+    }
+    let p = Vec3::from_array(gbuffer.position[i]);
+    let n = Vec3::from_array(gbuffer.normal[i]);
+    if !light.reaches(p.as_dvec3(), n.as_dvec3()) {
+        return None;
+    }
+    Some(reference.occluded(shadow_ray_origin(p, n), light.position.as_dvec3()))
+}
+
+/// Samples light `light`'s rendered `mask` over `gbuffer`: `n` stratified receiver pixels traced
+/// against `reference`.
+pub fn sample_light(
+    reference: &Reference,
+    gbuffer: &GBuffer,
+    light: &Light,
+    mask: &Mask,
+    n: usize,
+    rng: &mut fastrand::Rng,
+) -> LightSample {
+    let pixels = receivers_in_tile_order(mask);
+    let picks = stratified(&pixels, n, rng);
+    let exact = picks.len() == pixels.len();
+    // (weight, wrong) per pick the reference also counts as a receiver.
+    let judged: Vec<(f64, bool)> = picks
+        .par_iter()
+        .filter_map(|&(i, w)| {
+            let shadowed = exact_at(reference, gbuffer, light, i as usize)?;
+            let rendered_shadowed = mask.values[i as usize] == MaskValue::Shadowed as u8;
+            Some((w, shadowed != rendered_shadowed))
+        })
+        .collect();
+    let (sum_w, sum_w2, wrong_w) = judged
+        .iter()
+        .fold((0.0, 0.0, 0.0), |(s, s2, e), &(w, wrong)| {
+            (s + w, s2 + w * w, e + if wrong { w } else { 0.0 })
+        });
+    let share = if sum_w > 0.0 { wrong_w / sum_w } else { 0.0 };
+    let effective = if sum_w2 > 0.0 {
+        sum_w * sum_w / sum_w2
+    } else {
+        0.0
+    };
+    // The picks' weights sum to the mask's receivers; the kept ones estimate the shared ones.
+    let picked_w: f64 = picks.iter().map(|p| p.1).sum();
+    let receivers = if picked_w > 0.0 {
+        pixels.len() as f64 * sum_w / picked_w
+    } else {
+        0.0
+    };
+    LightSample {
+        light: mask.light,
+        receivers,
+        samples: judged.len(),
+        effective,
+        exact,
+        error: Interval::wilson(share, effective, exact),
+    }
+}
+
+/// Samples every mask of a frame (`frame` numbers it for the random streams).
+pub fn sample_frame(
+    reference: &Reference,
+    gbuffer: &GBuffer,
+    lights: &[Light],
+    masks: &[Mask],
+    n: usize,
+    seed: u64,
+    frame: u64,
+) -> FrameSample {
+    let per_light: Vec<LightSample> = masks
+        .iter()
+        .filter(|m| m.light < lights.len())
+        .map(|m| {
+            let mut rng = stream(seed, frame, m.light);
+            sample_light(reference, gbuffer, &lights[m.light], m, n, &mut rng)
+        })
+        .collect();
+    let rays = per_light.iter().map(|l| l.samples).sum();
+    FrameSample {
+        total: pooled(&per_light),
+        per_light,
+        rays,
+    }
+}
+
+/// Several lights' (or frames') estimates as one share of all their receivers: each weighted by
+/// its receivers, the interval on the summed effective sizes.
+pub fn pooled(parts: &[LightSample]) -> Interval {
+    let receivers: f64 = parts.iter().map(|p| p.receivers).sum();
+    if receivers <= 0.0 {
+        return Interval::wilson(0.0, 0.0, parts.iter().all(|p| p.exact));
+    }
+    let share = parts
+        .iter()
+        .map(|p| p.receivers * p.error.value)
+        .sum::<f64>()
+        / receivers;
+    // The effective size of a stratified share with strata weights f_l = receivers_l / R and
+    // equal spreads: 1 / sum(f_l^2 / n_l). Exact lights (every pixel traced) add no spread.
+    let spread: f64 = parts
+        .iter()
+        .filter(|p| !p.exact)
+        .map(|p| (p.receivers / receivers).powi(2) / p.effective.max(1.0))
+        .sum();
+    if spread <= 0.0 {
+        return Interval::wilson(share, 0.0, true);
+    }
+    Interval::wilson(share, 1.0 / spread, false)
+}
+
+/// One light's estimate pooled over its last frames, for the running display and `auto`.
+#[derive(Debug, Clone, Default)]
+pub struct Running {
+    window: usize,
+    frames: std::collections::VecDeque<LightSample>,
+}
+
+impl Running {
+    pub fn new(window: usize) -> Running {
+        Running {
+            window: window.max(1),
+            frames: std::collections::VecDeque::new(),
+        }
+    }
+
+    pub fn push(&mut self, s: LightSample) {
+        if self.frames.len() == self.window {
+            self.frames.pop_front();
+        }
+        self.frames.push_back(s);
+    }
+
+    /// Forgets the frames (the light or its technique's options changed).
+    pub fn clear(&mut self) {
+        self.frames.clear();
+    }
+
+    pub fn frames(&self) -> usize {
+        self.frames.len()
+    }
+
+    /// The error over the window's frames, each weighted by its receivers.
+    pub fn estimate(&self) -> Option<Interval> {
+        if self.frames.is_empty() {
+            return None;
+        }
+        let parts: Vec<LightSample> = self.frames.iter().copied().collect();
+        Some(pooled(&parts))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn wilson_matches_a_worked_value_and_closes_when_exact() {
+        // 10 wrong of 100: Wilson's 95% interval is [0.0552, 0.1744].
+        let i = Interval::wilson(0.1, 100.0, false);
+        assert!((i.low - 0.0552).abs() < 5e-4, "{i:?}");
+        assert!((i.high - 0.1744).abs() < 5e-4, "{i:?}");
+        // Nothing wrong in 512: the upper end is about 3.7/512, not 0.
+        let z = Interval::wilson(0.0, 512.0, false);
+        assert_eq!(z.low, 0.0);
+        assert!(z.high > 0.006 && z.high < 0.008, "{z:?}");
+        let e = Interval::wilson(0.25, 4.0, true);
+        assert_eq!((e.low, e.high), (0.25, 0.25));
+    }
+
+    #[test]
+    fn strata_cover_the_pixels_evenly_and_every_pixel_when_few() {
+        let pixels: Vec<u32> = (0..1000).collect();
+        let mut rng = fastrand::Rng::with_seed(7);
+        let picks = stratified(&pixels, 100, &mut rng);
+        assert_eq!(picks.len(), 100);
+        for (k, (p, w)) in picks.iter().enumerate() {
+            assert_eq!(*w, 10.0);
+            assert_eq!(*p as usize / 10, k, "pick {k} outside its stratum");
+        }
+        let all = stratified(&pixels[..50], 100, &mut rng);
+        assert_eq!(all.len(), 50);
+        assert!(all.iter().all(|p| p.1 == 1.0));
+    }
+
+    #[test]
+    fn tile_order_keeps_receivers_only_and_walks_tiles() {
+        let mut m = Mask {
+            light: 0,
+            width: 40,
+            height: 2,
+            values: vec![1; 80],
+        };
+        m.values[3] = 0;
+        let order = receivers_in_tile_order(&m);
+        assert_eq!(order.len(), 79);
+        // The first tile (x < 16) finishes both rows before x = 16 starts.
+        assert_eq!(order[15], 40);
+        assert_eq!(order[31], 16);
+    }
+
+    #[test]
+    fn pooled_shares_weigh_lights_by_receivers() {
+        let part = |receivers: f64, value: f64, exact: bool| LightSample {
+            light: 0,
+            receivers,
+            samples: 100,
+            effective: 100.0,
+            exact,
+            error: Interval::wilson(value, 100.0, exact),
+        };
+        let p = pooled(&[part(300.0, 0.1, false), part(100.0, 0.5, false)]);
+        assert!((p.value - 0.2).abs() < 1e-12);
+        assert!(p.low < 0.2 && p.high > 0.2);
+        let e = pooled(&[part(100.0, 0.1, true), part(100.0, 0.3, true)]);
+        assert_eq!((e.value, e.low, e.high), (0.2, 0.2, 0.2));
+    }
+}
