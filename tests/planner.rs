@@ -805,7 +805,7 @@ fn auto_picks_per_light_from_measured_cost_and_the_accuracy_target() {
             .unwrap();
         for t in [Technique::ShadowMap, Technique::ShadowVolume] {
             assert!(
-                r.costs().cost(light, t).is_some(),
+                r.auto_memory().cost(light, t).is_some(),
                 "{why}: {t} not measured"
             );
         }

@@ -6,7 +6,9 @@ use glam::Vec3;
 use shadowlab::frame::Frame;
 use shadowlab::gl::FrameRequest;
 use shadowlab::options::Technique;
+use shadowlab::plan::auto::LEARNING_FRAMES;
 use shadowlab::presets::Preset;
+use shadowlab::report::estimate::{learn_auto, sampled_frame};
 use shadowlab::scene::Scene;
 use shadowlab::truth::{self, Reference, reference};
 use std::path::{Path, PathBuf};
@@ -88,7 +90,8 @@ pub struct Args {
     /// exact reference say and which triangle blocks the shadow ray.
     #[arg(long, value_name = "X,Y")]
     probe: Vec<String>,
-    /// Print what the planner decided and what the frame reused (JSON on stdout).
+    /// Print what the planner decided, what the frame reused and, per light, its error against
+    /// the sampled reference (`estimate.samples` pixels traced; JSON on stdout).
     #[arg(long)]
     stats: bool,
 }
@@ -178,17 +181,32 @@ pub fn run(common: &CommonArgs, args: &Args) -> Result<()> {
         .iter()
         .map(|s| parse_probe(s))
         .collect::<Result<_>>()?;
-    let request = FrameRequest {
-        masks: args.mask.is_some() || !probes.is_empty(),
-        ..FrameRequest::default()
-    };
-    if options.uses(scene.lights.len(), Technique::Auto) {
-        // `auto` picks from measured costs: measure before the frame that is kept.
-        for _ in 0..shadowlab::plan::auto::LEARNING_FRAMES {
-            renderer.render_with(&scene, &options, FrameRequest::default())?;
+    let sampling = options.estimate.samples > 0;
+    let wants_reference =
+        sampling && (args.stats || options.uses(scene.lights.len(), Technique::Auto));
+    let reference = wants_reference.then(|| Reference::build(&scene));
+    // `auto` picks from measured costs and errors: measure before the frame that is kept.
+    learn_auto(&mut renderer, &scene, &options, reference.as_ref())?;
+    let (frame, sampled) = match reference.as_ref().filter(|_| args.stats) {
+        Some(r) => {
+            let s = sampled_frame(
+                &mut renderer,
+                &scene,
+                &scene.camera,
+                &options,
+                r,
+                LEARNING_FRAMES as u64,
+            )?;
+            (s.frame, Some((s.sample, s.trace_ms)))
         }
-    }
-    let frame = renderer.render_with(&scene, &options, request)?;
+        None => {
+            let request = FrameRequest {
+                masks: args.mask.is_some() || !probes.is_empty(),
+                ..FrameRequest::default()
+            };
+            (renderer.render_with(&scene, &options, request)?, None)
+        }
+    };
     #[cfg(feature = "window")]
     if let Some(window) = ctx.window() {
         // Show the frame too, proving the window path presents what it rendered.
@@ -216,6 +234,12 @@ pub fn run(common: &CommonArgs, args: &Args) -> Result<()> {
                 "plan": frame.plan_stats,
                 "cache": frame.cache,
                 "volumes": volumes,
+                "sampled": sampled.as_ref().map(|(s, ms)| serde_json::json!({
+                    "samples_per_light": options.estimate.samples,
+                    "trace_ms": ms,
+                    "total": s.total,
+                    "per_light": s.per_light,
+                })),
             }))?
         );
     }

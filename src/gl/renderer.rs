@@ -28,7 +28,7 @@ use crate::options::{
     Compare, CompareResult, DepthBits, Filter, Options, Outside, Pipeline, StencilPasses,
     StencilWrap, Technique, VolumeShading,
 };
-use crate::plan::auto::CostMemory;
+use crate::plan::auto::AutoMemory;
 use crate::plan::occlusion::DepthPyramid;
 use crate::plan::pass::{PassId, Stage};
 use crate::plan::planner::{DepthNeed, Planner};
@@ -483,8 +483,18 @@ impl Renderer {
     }
 
     /// What `technique = auto` has measured so far.
-    pub fn costs(&self) -> &CostMemory {
-        self.planner.costs()
+    pub fn auto_memory(&self) -> &AutoMemory {
+        self.planner.memory()
+    }
+
+    /// Gives `auto` the last frame's sampled errors (its masks against `truth::sampled`): the
+    /// GL layer measures no error itself.
+    pub fn record_errors(
+        &mut self,
+        samples: &[crate::truth::sampled::LightSample],
+        options: &Options,
+    ) {
+        self.planner.record_errors(samples, options);
     }
 
     /// The one limit no fallback lifts: a shadow map larger than the GL's textures. (Choices

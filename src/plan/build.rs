@@ -1,7 +1,7 @@
 //! How a [`Plan`] is built, step by step: the camera, what is visible, the frame's casters and
 //! receivers, then each enabled light: culled, or given a technique and its shadow work.
 
-use super::auto::{self, CostMemory};
+use super::auto::{self, AutoMemory};
 use super::scissor::{self, Scissor};
 use super::{CameraSetup, LightPlan, PartTriangles, Plan, PlanStats, VolumePart, cull};
 use crate::geometry::{Aabb, Frustum};
@@ -34,7 +34,7 @@ type PieceCandidate<'a> = (usize, PieceRef, Aabb, &'a CasterGroup);
 struct FrameFacts<'a> {
     scene: &'a Scene,
     options: &'a Options,
-    memory: &'a CostMemory,
+    memory: &'a AutoMemory,
     camera: CameraSetup,
     /// The camera frustum without a far plane: volumes reach infinity.
     view_frustum: Frustum,
@@ -63,7 +63,7 @@ impl Plan {
         scene: &Scene,
         camera: &Camera,
         options: &Options,
-        memory: &CostMemory,
+        memory: &AutoMemory,
         groups: Option<&CasterGroups>,
     ) -> Plan {
         let camera_setup = camera_for(scene, camera, options);
@@ -231,7 +231,7 @@ impl<'a> FrameFacts<'a> {
         scene: &'a Scene,
         (camera, setup): (&Camera, CameraSetup),
         options: &'a Options,
-        memory: &'a CostMemory,
+        memory: &'a AutoMemory,
         (visible, casters, leaves): (&[bool], &[bool], Vec<Aabb>),
         groups: Option<&'a CasterGroups>,
     ) -> FrameFacts<'a> {

@@ -22,7 +22,7 @@ use crate::scene::vis::VisStats;
 use crate::scene::{Camera, Scene};
 use crate::shadow::views::ShadowView;
 use crate::shadow::volume::{CasterGroups, Counting, PieceRef};
-use auto::CostMemory;
+use auto::AutoMemory;
 use glam::{Mat3, Mat4, Vec3};
 
 /// `options` without the planner's decisions that change pixels by design (another shadow-map
@@ -230,7 +230,7 @@ impl Plan {
             scene,
             camera,
             options,
-            &CostMemory::default(),
+            &AutoMemory::default(),
             groups.as_ref(),
         )
     }

@@ -7,7 +7,7 @@
 //! the volume draws by their inputs.
 
 use super::Plan;
-use super::auto::CostMemory;
+use super::auto::AutoMemory;
 use super::occlusion::DepthPyramid;
 use super::pass::PassTime;
 use super::volume_draws::{LightVolumeDraws, PieceChoices, VolumeDrawError, VolumePlanner};
@@ -15,6 +15,7 @@ use super::{CameraSetup, LightPlan};
 use crate::options::{Options, Technique};
 use crate::scene::{Camera, Scene};
 use crate::shadow::volume::CasterGroups;
+use crate::truth::sampled::LightSample;
 use std::sync::Arc;
 
 /// Everything the base pass's depth is drawn from, so that a frame with the same as the last
@@ -61,7 +62,9 @@ struct DepthMemory {
 /// The planner's state across frames.
 #[derive(Default)]
 pub struct Planner {
-    costs: CostMemory,
+    memory: AutoMemory,
+    /// Each planned light and the technique it ran with in the last frame.
+    ran: Vec<(usize, Technique)>,
     /// The scene's caster groups and the revision they were built from.
     casters: Option<(u64, Arc<CasterGroups>)>,
     volumes: VolumePlanner,
@@ -75,15 +78,19 @@ impl Planner {
     }
 
     /// What `technique = auto` has measured so far.
-    pub fn costs(&self) -> &CostMemory {
-        &self.costs
+    pub fn memory(&self) -> &AutoMemory {
+        &self.memory
     }
 
     /// Learns from a frame's pass times, for `technique = auto`.
     pub fn record_costs(&mut self, plan: &Plan, passes: &[PassTime]) {
-        let ran: Vec<(usize, Technique)> =
-            plan.lights.iter().map(|l| (l.light, l.technique)).collect();
-        self.costs.record(passes, &ran);
+        self.ran = plan.lights.iter().map(|l| (l.light, l.technique)).collect();
+        self.memory.record(passes, &self.ran);
+    }
+
+    /// Learns from the last frame's sampled errors, for `technique = auto`.
+    pub fn record_errors(&mut self, samples: &[LightSample], options: &Options) {
+        self.memory.record_errors(samples, &self.ran, options);
     }
 
     /// The scene's caster groups, built again only when its surfaces changed.
@@ -101,7 +108,7 @@ impl Planner {
     /// The plan for `camera`, with the costs measured so far.
     pub fn plan(&mut self, scene: &Scene, camera: &Camera, options: &Options) -> Plan {
         let groups = Plan::needs_casters(scene, options).then(|| self.casters(scene));
-        Plan::build_with(scene, camera, options, &self.costs, groups.as_deref())
+        Plan::build_with(scene, camera, options, &self.memory, groups.as_deref())
     }
 
     /// What this frame needs of the depth the base pass lays down; `float_depth` says the

@@ -2,6 +2,7 @@
 
 pub mod bench;
 pub mod check;
+pub mod estimate;
 pub mod images;
 pub mod plot;
 pub mod reproduce;

@@ -1,0 +1,94 @@
+//! Frames measured while they run: a frame rendered with its masks, sampled against the exact
+//! reference (`truth::sampled`), and the errors given to `technique = auto`.
+
+use crate::frame::Frame;
+use crate::gl::{FrameRequest, RenderError, Renderer};
+use crate::options::{Options, Technique};
+use crate::plan::auto::LEARNING_FRAMES;
+use crate::scene::{Camera, Scene};
+use crate::truth::Reference;
+use crate::truth::sampled::{FrameSample, sample_frame};
+use std::time::Instant;
+
+/// How many times `estimate.samples` the learning frames trace.
+pub const LEARNING_SAMPLES: u32 = 4;
+
+/// A frame with its masks and its sampled error.
+pub struct SampledFrame {
+    pub frame: Frame,
+    pub sample: FrameSample,
+    /// Milliseconds spent tracing the samples.
+    pub trace_ms: f64,
+}
+
+/// Renders a frame of `scene` from `camera` with its masks, samples them
+/// (`options.estimate.samples` pixels per light; `index` numbers the frame's random streams),
+/// and gives the errors to the renderer's `auto`.
+pub fn sampled_frame(
+    renderer: &mut Renderer,
+    scene: &Scene,
+    camera: &Camera,
+    options: &Options,
+    reference: &Reference,
+    index: u64,
+) -> Result<SampledFrame, RenderError> {
+    let frame = renderer.render_at(
+        scene,
+        camera,
+        options,
+        FrameRequest {
+            masks: true,
+            ..FrameRequest::default()
+        },
+    )?;
+    let gbuffer = frame
+        .gbuffer
+        .as_ref()
+        .ok_or(RenderError::Gl("the renderer returned no G-buffer".into()))?;
+    let start = Instant::now();
+    let sample = sample_frame(
+        reference,
+        gbuffer,
+        &scene.lights,
+        &frame.masks,
+        options.estimate.samples as usize,
+        u64::from(options.estimate.seed),
+        index,
+    );
+    let trace_ms = start.elapsed().as_secs_f64() * 1e3;
+    renderer.record_errors(&sample.per_light, options);
+    Ok(SampledFrame {
+        frame,
+        sample,
+        trace_ms,
+    })
+}
+
+/// The frames a one-frame command renders before the one it keeps, so that `auto` has run and
+/// measured each technique of every light: sampled when `estimate.samples` is above 0 (its
+/// error measured, not assumed), else timed only. Nothing when no light uses `auto`. These
+/// frames trace `LEARNING_SAMPLES` times the samples: one frame each is all `auto` gets, and a
+/// technique it does not run must show its whole interval under the target.
+pub fn learn_auto(
+    renderer: &mut Renderer,
+    scene: &Scene,
+    options: &Options,
+    reference: Option<&Reference>,
+) -> Result<(), RenderError> {
+    if !options.uses(scene.lights.len(), Technique::Auto) {
+        return Ok(());
+    }
+    let mut learning = options.clone();
+    learning.estimate.samples = options.estimate.samples.saturating_mul(LEARNING_SAMPLES);
+    for i in 0..LEARNING_FRAMES {
+        match reference.filter(|_| options.estimate.samples > 0) {
+            Some(r) => {
+                sampled_frame(renderer, scene, &scene.camera, &learning, r, i as u64)?;
+            }
+            None => {
+                renderer.render_with(scene, options, FrameRequest::default())?;
+            }
+        }
+    }
+    Ok(())
+}

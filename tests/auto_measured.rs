@@ -1,0 +1,212 @@
+//! `technique = auto` from measured errors (the sampled reference) and measured pass times: each
+//! light's choice checked against the full reference, against independently measured costs, and
+//! for stability on a still camera.
+
+mod common;
+
+use common::{gl_on, load_scene_file, options_with};
+use shadowlab::frame::Frame;
+use shadowlab::gl::{FrameRequest, Renderer};
+use shadowlab::options::{BackendChoice, Options, Technique};
+use shadowlab::report::estimate::{learn_auto, sampled_frame};
+use shadowlab::scene::{Scene, path};
+use shadowlab::truth::{Counts, ExactMasks, Reference};
+use std::collections::BTreeMap;
+
+const AUTO: &[&str] = &["technique=auto", "accuracy=1", "width=320", "height=240"];
+
+/// The technique each light ran with in `frame`.
+fn techniques(frame: &Frame) -> BTreeMap<usize, Technique> {
+    frame
+        .steps
+        .iter()
+        .filter_map(|s| Some((s.light?, s.technique?)))
+        .collect()
+}
+
+/// Each light's full-reference counts in a frame rendered with masks.
+fn full_errors(scene: &Scene, frame: &Frame) -> BTreeMap<usize, Counts> {
+    let mut exact = ExactMasks::new();
+    let m = exact.measure(scene, frame.gbuffer.as_ref().unwrap(), &frame.masks);
+    m.per_light.into_iter().collect()
+}
+
+/// A renderer that has learnt `scene` from its camera, and the frame it then keeps.
+fn learnt(renderer: &mut Renderer, scene: &Scene, o: &Options, reference: &Reference) -> Frame {
+    renderer.load_scene(scene).unwrap();
+    learn_auto(renderer, scene, o, Some(reference)).unwrap();
+    sampled_frame(renderer, scene, &scene.camera, o, reference, 99)
+        .unwrap()
+        .frame
+}
+
+/// The paper's volumes (front-facing casters, its edge rule) under the planner's defaults: on
+/// ctf_compromise they get 27-45% of some lights' receivers wrong, which the constant estimate
+/// (0.05% for volumes) cannot see.
+const PAPER_VOLUMES: &[&str] = &[
+    "shadow_volume.casters=front",
+    "shadow_volume.edge_rule=paper",
+];
+
+#[test]
+fn auto_at_one_percent_picks_for_every_light_of_ctf_compromise_a_technique_within_it() {
+    let (mut scene, _, _) = load_scene_file("ctf_compromise");
+    let o = options_with(&[AUTO, PAPER_VOLUMES].concat());
+    let reference = Reference::build(&scene);
+    let (_ctx, mut renderer) = gl_on(BackendChoice::Egl, &o);
+    let camera = scene.camera;
+    let (mut lights, mut volume_misses) = (0, 0);
+    for key in path::turn(&camera, 4) {
+        scene.camera = key.apply(&camera);
+        let frame = learnt(&mut renderer, &scene, &o, &reference);
+        let chosen = techniques(&frame);
+        let full = full_errors(&scene, &frame);
+        // The volumes' own error in this view.
+        let volumes = {
+            let mut v = o.clone();
+            v.technique = Technique::ShadowVolume;
+            let f = renderer
+                .render_with(
+                    &scene,
+                    &v,
+                    FrameRequest {
+                        masks: true,
+                        ..Default::default()
+                    },
+                )
+                .unwrap();
+            full_errors(&scene, &f)
+        };
+        for (light, t) in &chosen {
+            let e = full[light].rates().total;
+            let sv = volumes.get(light).map_or(0.0, |c| c.rates().total);
+            println!(
+                "yaw {:.0}: light {light}: {t} full error {:.3}% (volumes {:.3}%)",
+                key.yaw_deg,
+                100.0 * e,
+                100.0 * sv
+            );
+            assert!(
+                e <= 0.01,
+                "light {light} at yaw {}: {t} gets {:.3}% wrong ({:?})",
+                key.yaw_deg,
+                100.0 * e,
+                frame.plan_stats.choices
+            );
+            lights += 1;
+            volume_misses += (sv > 0.01) as usize;
+        }
+    }
+    println!("{lights} light choices, {volume_misses} where volumes get over 1% wrong");
+    assert!(lights >= 8, "too few lights in view to test");
+    assert!(
+        volume_misses >= 4,
+        "volumes miss 1% on too few lights: the test would not tell measurement from the estimate"
+    );
+}
+
+/// Median milliseconds of each light's passes over `frames` frames of `o`.
+fn light_costs(renderer: &mut Renderer, scene: &Scene, o: &Options) -> BTreeMap<usize, f64> {
+    let mut per: BTreeMap<usize, Vec<f64>> = BTreeMap::new();
+    for _ in 0..7 {
+        let f = renderer.render(scene, o).unwrap();
+        let mut sums: BTreeMap<usize, f64> = BTreeMap::new();
+        for p in &f.passes {
+            if let Some(l) = p.pass.light {
+                *sums.entry(l).or_default() += p.ms;
+            }
+        }
+        for (l, ms) in sums {
+            per.entry(l).or_default().push(ms);
+        }
+    }
+    per.into_iter()
+        .map(|(l, mut v)| {
+            v.sort_by(f64::total_cmp);
+            (l, v[v.len() / 2])
+        })
+        .collect()
+}
+
+#[test]
+fn auto_on_oa_dm1_takes_the_cheaper_technique_that_meets_the_target_and_holds_it() {
+    let (scene, _, _) = load_scene_file("oa_dm1");
+    let o = options_with(AUTO);
+    let reference = Reference::build(&scene);
+    let (_ctx, mut renderer) = gl_on(BackendChoice::Egl, &o);
+    let frame = learnt(&mut renderer, &scene, &o, &reference);
+    let chosen = techniques(&frame);
+    assert!(!chosen.is_empty());
+    // Each technique forced on every light: its full error and its cost per light, measured
+    // apart from `auto` on a renderer of its own.
+    let mut measured = std::collections::HashMap::new();
+    for t in ["technique=shadow_map", "technique=shadow_volume"] {
+        let f = options_with(&[t, "width=320", "height=240"]);
+        let (_c, mut r) = gl_on(BackendChoice::Egl, &f);
+        r.load_scene(&scene).unwrap();
+        let framed = r
+            .render_with(
+                &scene,
+                &f,
+                FrameRequest {
+                    masks: true,
+                    ..Default::default()
+                },
+            )
+            .unwrap();
+        measured.insert(
+            f.technique,
+            (
+                full_errors(&scene, &framed),
+                light_costs(&mut r, &scene, &f),
+            ),
+        );
+    }
+    for (light, t) in &chosen {
+        let meets = |t: Technique| measured[&t].0[light].rates().total <= 0.01;
+        let cost = |t: Technique| measured[&t].1.get(light).copied().unwrap_or(0.0);
+        let other = if *t == Technique::ShadowMap {
+            Technique::ShadowVolume
+        } else {
+            Technique::ShadowMap
+        };
+        println!(
+            "light {light}: {t} ({:.2} ms, meets: {}) against {other} ({:.2} ms, meets: {})",
+            cost(*t),
+            meets(*t),
+            cost(other),
+            meets(other)
+        );
+        assert!(meets(*t), "light {light}: {t} misses 1%");
+        // The other is not clearly cheaper while also meeting the target. "Clearly": by more
+        // than `estimate.hysteresis` (25%) and 0.5 ms, since llvmpipe's pass times on a
+        // 2-core machine wander by about that much from one run to the next.
+        if meets(other) {
+            assert!(
+                cost(other) >= 0.75 * cost(*t) - 0.5,
+                "light {light}: {other} at {:.2} ms meets 1% too and is cheaper than {t} at {:.2} ms",
+                cost(other),
+                cost(*t)
+            );
+        }
+    }
+    // A still camera: 24 more frames, sampled as they run, and no light changes technique.
+    for i in 0..24 {
+        let f = sampled_frame(
+            &mut renderer,
+            &scene,
+            &scene.camera,
+            &o,
+            &reference,
+            100 + i,
+        )
+        .unwrap()
+        .frame;
+        assert_eq!(
+            techniques(&f),
+            chosen,
+            "frame {i}: {:?}",
+            f.plan_stats.choices
+        );
+    }
+}
