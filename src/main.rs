@@ -27,6 +27,8 @@ enum Command {
     Inspect(commands::inspect::Args),
     /// Measure frame time and error against the exact reference over a sweep of options.
     Bench(commands::bench::Args),
+    /// Search the option space of one scene for the Pareto frontier of error against time.
+    Tune(commands::tune::Args),
     /// Check maps of a data set: both techniques, planner on and off, against the reference.
     Check(commands::check::Args),
     /// Regenerate the paper's figures and claims beside our measurements (index.html + .md).
@@ -47,6 +49,7 @@ fn main() {
         Command::Options(a) => commands::options::run(&a),
         Command::Inspect(a) => commands::inspect::run(&cli.common, &a),
         Command::Bench(a) => commands::bench::run(&cli.common, &a),
+        Command::Tune(a) => commands::tune::run(&cli.common, &a),
         Command::Check(a) => commands::check::run(&cli.common, &a),
         Command::Reproduce(a) => commands::reproduce::run(&cli.common, &a),
         #[cfg(feature = "window")]

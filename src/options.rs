@@ -599,7 +599,8 @@ define_options! {
         /// GL context path: auto tries egl (desktop GL), then egl_es (OpenGL ES 3.0), then osmesa.
         backend: BackendChoice = BackendChoice::Auto;
         /// For `technique = auto`: the share of a light's receiver pixels, in percent, its
-        /// technique may be expected to get wrong (see `plan::auto` for the estimates).
+        /// technique may get wrong: measured on sampled pixels where the frames are sampled
+        /// (`estimate.*`), else estimated (see `plan::auto`).
         accuracy: f32 = 0.5, in 0.0 ..= 100.0;
     }
 

@@ -1,11 +1,10 @@
 //! `shadowlab bench`: frame time and accuracy of a sweep of options, as a table, JSON and a plot.
 
-use super::{CommonArgs, load, start_gl};
+use super::{CommonArgs, camera_path, load, start_gl};
 use anyhow::{Context, Result, bail};
 use shadowlab::options::Technique;
 use shadowlab::report::bench::{Bench, BenchSettings, sweep_configs};
 use shadowlab::report::{plot, table};
-use shadowlab::scene::path::{self, TURN_FRAMES};
 use std::path::PathBuf;
 
 #[derive(clap::Args)]
@@ -76,11 +75,7 @@ pub fn run(common: &CommonArgs, args: &Args) -> Result<()> {
         }
     }
     let configs = sweep_configs(&options, &sweeps)?;
-    let keys = match args.path.as_deref() {
-        None => vec![path::PathKey::of(&scene.camera)],
-        Some("turn") => path::turn(&scene.camera, TURN_FRAMES),
-        Some(file) => path::read(std::path::Path::new(file))?,
-    };
+    let keys = camera_path(&scene.camera, args.path.as_deref())?;
     let frames = args
         .frames
         .unwrap_or(if args.path.is_some() { keys.len() } else { 10 });

@@ -7,6 +7,7 @@ pub mod inspect;
 pub mod options;
 pub mod render;
 pub mod reproduce;
+pub mod tune;
 #[cfg(feature = "window")]
 pub mod view;
 
@@ -36,6 +37,19 @@ pub struct CommonArgs {
     /// Frame size, e.g. 640x480 (the paper's resolution, the default).
     #[arg(long, global = true, value_name = "WxH")]
     pub size: Option<String>,
+}
+
+/// The camera path of `--path`: `turn`, a recorded path file, or the scene's camera when absent.
+pub fn camera_path(
+    camera: &shadowlab::scene::Camera,
+    path: Option<&str>,
+) -> Result<Vec<shadowlab::scene::path::PathKey>> {
+    use shadowlab::scene::path;
+    Ok(match path {
+        None => vec![path::PathKey::of(camera)],
+        Some("turn") => path::turn(camera, path::TURN_FRAMES),
+        Some(file) => path::read(std::path::Path::new(file))?,
+    })
 }
 
 /// Parses `WxH`.

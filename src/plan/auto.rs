@@ -416,8 +416,10 @@ mod tests {
 
     #[test]
     fn measured_errors_decide_and_the_choice_holds_still_then_follows_them() {
-        let mut o = Options::default();
-        o.accuracy = 1.0;
+        let o = Options {
+            accuracy: 1.0,
+            ..Options::default()
+        };
         let mut m = AutoMemory::default();
         // Maps cost 2 ms and get 0.2% wrong (four frames: one frame's interval reaches past
         // 1%); volumes 3 ms and nothing wrong.
@@ -462,8 +464,10 @@ mod tests {
 
     #[test]
     fn a_technique_not_running_needs_its_whole_interval_under_the_target() {
-        let mut o = Options::default();
-        o.accuracy = 1.0;
+        let o = Options {
+            accuracy: 1.0,
+            ..Options::default()
+        };
         let mut m = AutoMemory::default();
         // Volumes run, cost 4 ms. The map costs 1 ms; one frame measured 0.8% on 128 pixels:
         // its interval reaches past 1%, so it does not replace the running volumes.

@@ -377,6 +377,11 @@ impl<'a> Bench<'a> {
         }
     }
 
+    /// The renderer the bench measures on (for other measurements of the same scene).
+    pub fn renderer(&mut self) -> &mut Renderer {
+        self.renderer
+    }
+
     fn measure(&mut self, options: &Options) -> Result<Measured, RenderError> {
         let (scene, settings) = (self.scene, &self.settings);
         let camera = |i: usize| settings.path[i % settings.path.len()].apply(&scene.camera);

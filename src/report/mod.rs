@@ -7,3 +7,4 @@ pub mod images;
 pub mod plot;
 pub mod reproduce;
 pub mod table;
+pub mod tune;

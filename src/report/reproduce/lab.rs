@@ -63,6 +63,11 @@ impl<'a> Lab<'a> {
         }
     }
 
+    /// The renderer the lab measures on.
+    pub fn renderer(&mut self) -> &mut Renderer {
+        self.bench.renderer()
+    }
+
     pub fn bar(&self) -> &ProgressBar {
         self.bar
     }

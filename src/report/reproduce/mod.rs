@@ -14,6 +14,7 @@ mod figures;
 mod lab;
 mod page;
 mod pareto;
+pub use pareto::fixed_sweep;
 
 pub use lab::{Lab, pct};
 
@@ -54,6 +55,8 @@ pub enum ReproduceError {
     Plot(String),
     #[error("{0}")]
     Json(#[from] serde_json::Error),
+    #[error(transparent)]
+    Tune(#[from] crate::report::tune::TuneError),
 }
 
 /// What a run measures and how much.
@@ -308,6 +311,7 @@ pub fn run(
         renderer.load_scene(&scene)?;
         let mut lab = Lab::new(renderer, &scene, name, options, settings, out, &bar);
         sweeps.push(pareto::run(&mut lab)?);
+        sweeps.push(pareto::frontier(&mut lab)?);
         report.rows.extend(lab.into_rows());
         bar.inc(1);
     }

@@ -4,9 +4,12 @@
 
 use super::lab::{Lab, pct};
 use super::{Figure, ReproduceError, Section};
-use crate::report::bench::BenchRow;
+use crate::options::Options;
+use crate::report::bench::{BenchConfig, BenchRow};
 use crate::report::plot;
 use crate::report::table::{Align, Table, bench_table};
+use crate::report::tune::{TuneSettings, tune};
+use crate::scene::path::PathKey;
 
 /// The configurations: the paper's choices first, then the toggles that matter most.
 fn configs(quick: bool) -> Vec<(&'static str, Vec<&'static str>)> {
@@ -65,6 +68,22 @@ fn configs(quick: bool) -> Vec<(&'static str, Vec<&'static str>)> {
         ),
         ("auto planner", vec!["technique=auto", PLANNER]),
     ]
+}
+
+/// The fixed sweep of this section over a scene's options `base`, as the lab measures it (the
+/// paper's frame with each configuration's assignments): for comparing other searches with it.
+pub fn fixed_sweep(base: &Options, quick: bool) -> Result<Vec<BenchConfig>, ReproduceError> {
+    configs(quick)
+        .into_iter()
+        .map(|(name, sets)| {
+            let mut o = base.clone();
+            for s in super::PAPER_FRAME.iter().chain(&sets) {
+                o.set_assignment(s)?;
+            }
+            o.validate()?;
+            Ok(BenchConfig::named(name, o))
+        })
+        .collect()
 }
 
 /// For each row, whether no other row with shadows is at least as fast and as accurate and
@@ -168,6 +187,74 @@ pub fn run(lab: &mut Lab) -> Result<Section, ReproduceError> {
     for (_, sets) in &configs {
         s.regenerate.push(lab.render_command(sets));
     }
+    Ok(s)
+}
+
+/// The frontier `tune` finds from the scene's own options (the library's defaults, not the
+/// paper's frame): what each step of accuracy costs on this scene.
+pub fn frontier(lab: &mut Lab) -> Result<Section, ReproduceError> {
+    let name = lab.name.clone();
+    let mut s = Section::new(
+        &format!("frontier-{name}"),
+        &format!("The price of accuracy: {name}"),
+        "Not a figure of the paper: `shadowlab tune`'s budgeted search (successive halving over \
+         technique, map size, depth bits, filter, offsets, caster faces, omni views, counting, \
+         stencil passes, edge rule, casters and the planner), its finalists measured in full \
+         in this run; the frontier says what each step of error costs in time.",
+    );
+    let (candidates, finalists) = if lab.quick { (6, 3) } else { (32, 6) };
+    let scene = lab.scene;
+    let base = lab.base.clone();
+    let mut settings = TuneSettings::new(candidates, vec![PathKey::of(&scene.camera)]);
+    settings.finalists = finalists;
+    if lab.quick {
+        settings.rung_frames = vec![1];
+        settings.final_frames = 1;
+    }
+    lab.bar()
+        .set_message(format!("{name}: tune, {candidates} configurations"));
+    let hidden = indicatif::ProgressBar::hidden();
+    let result = tune(lab.renderer(), scene, &base, &settings, &hidden)?;
+    let file = format!("frontier-{name}.png");
+    plot::error_vs_time_marked(
+        &result.rows,
+        &result.frontier,
+        &format!("{name}: tune finalists (ringed: frontier)"),
+        &lab.out_path(&file),
+    )
+    .map_err(ReproduceError::Plot)?;
+    s.figures.push(Figure {
+        file,
+        caption: format!("{name}: tune's finalists, error against median frame time"),
+    });
+    let mut t = Table::new(&[
+        ("frontier configuration", Align::Left),
+        ("frame ms", Align::Right),
+        ("× shadows off", Align::Right),
+        ("error", Align::Right),
+    ]);
+    for r in result.frontier_rows() {
+        t.push(vec![
+            r.label.clone(),
+            format!("{:.1}", r.frame_ms.median),
+            format!("{:.2}", r.ratio_to_shadows_off),
+            pct(r.error.total),
+        ]);
+    }
+    for target in [1.0, 0.1] {
+        if let Some(r) = result.cheapest_meeting(target) {
+            s.findings.push(format!(
+                "The fastest found within {target}%: {} ({}, {:.2}x shadows off).",
+                r.label,
+                pct(r.error.total),
+                r.ratio_to_shadows_off
+            ));
+        }
+    }
+    s.tables.push(t);
+    s.regenerate.push(format!(
+        "shadowlab tune --scene assets/scenes/{name}.toml --candidates {candidates} --finalists {finalists}"
+    ));
     Ok(s)
 }
 

@@ -1,0 +1,176 @@
+//! `shadowlab tune`: the Pareto frontier of error against time on one scene, found by a budgeted
+//! search of the option space (successive halving), and the cheapest configuration that meets
+//! an accuracy target.
+
+use super::{CommonArgs, camera_path, load, start_gl};
+use anyhow::{Context, Result};
+use indicatif::{ProgressBar, ProgressStyle};
+use shadowlab::report::bench::BenchRow;
+use shadowlab::report::plot;
+use shadowlab::report::table::{Align, Table, bench_table};
+use shadowlab::report::tune::{TuneResult, TuneSettings, space, tune};
+use std::path::PathBuf;
+
+#[derive(clap::Args)]
+pub struct Args {
+    /// Scene file (TOML); the built-in scene when absent.
+    #[arg(long)]
+    scene: Option<PathBuf>,
+    /// The error target in percent of receiver pixels: the answer is the fastest frontier
+    /// configuration within it.
+    #[arg(long, default_value_t = 0.5)]
+    accuracy: f64,
+    /// Configurations drawn at random (seeded) for the first rung; each rung keeps the better
+    /// half by Pareto rank.
+    #[arg(long, default_value_t = 48)]
+    candidates: usize,
+    /// Configurations measured in full at the end.
+    #[arg(long, default_value_t = 8)]
+    finalists: usize,
+    /// Seed of the draw.
+    #[arg(long, default_value_t = 1)]
+    seed: u64,
+    /// Camera path, as for `bench`: `turn` or a recorded path file; the scene's camera when
+    /// absent.
+    #[arg(long)]
+    path: Option<String>,
+    /// Folder for tune.md, tune.json and tune.png (default: tune-<scene>).
+    #[arg(long)]
+    out: Option<PathBuf>,
+}
+
+/// The frontier as a table: fastest first, with whether each meets the target.
+fn frontier_table(result: &TuneResult, accuracy: f64) -> Table {
+    let mut t = Table::new(&[
+        ("configuration", Align::Left),
+        ("frame ms", Align::Right),
+        ("× shadows off", Align::Right),
+        ("error % (exact, first frame)", Align::Right),
+        ("path error % (sampled median)", Align::Right),
+        ("meets target", Align::Left),
+    ]);
+    for r in result.frontier_rows() {
+        t.push(vec![
+            r.label.clone(),
+            format!("{:.2}", r.frame_ms.median),
+            format!("{:.2}", r.ratio_to_shadows_off),
+            format!("{:.3}", 100.0 * r.error.total),
+            r.sampled
+                .as_ref()
+                .map_or("–".into(), |p| format!("{:.3}", 100.0 * p.median)),
+            if 100.0 * r.error.total <= accuracy {
+                "yes"
+            } else {
+                "no"
+            }
+            .into(),
+        ]);
+    }
+    t.note = Some(format!(
+        "Pareto frontier of {} finalists ({} configurations drawn, {} dimensions searched); \
+         target {accuracy}%.",
+        result.rows.len(),
+        result.settings.candidates,
+        space().len()
+    ));
+    t
+}
+
+fn answer(result: &TuneResult, accuracy: f64) -> String {
+    match result.cheapest_meeting(accuracy) {
+        Some(r) => format!(
+            "cheapest within {accuracy}%: {} ({:.3}% wrong, {:.2} ms, {:.2}× shadows off)",
+            r.label,
+            100.0 * r.error.total,
+            r.frame_ms.median,
+            r.ratio_to_shadows_off
+        ),
+        None => {
+            let best: Option<&BenchRow> = result
+                .rows
+                .iter()
+                .min_by(|a, b| a.error.total.total_cmp(&b.error.total));
+            format!(
+                "no configuration found meets {accuracy}%; the most accurate: {}",
+                best.map_or("none".into(), |r| format!(
+                    "{} ({:.3}%)",
+                    r.label,
+                    100.0 * r.error.total
+                ))
+            )
+        }
+    }
+}
+
+pub fn run(common: &CommonArgs, args: &Args) -> Result<()> {
+    let loaded = load(common, args.scene.as_deref())?;
+    let (scene, options) = (loaded.scene, loaded.options);
+    let path = camera_path(&scene.camera, args.path.as_deref())?;
+    let mut settings = TuneSettings::new(args.candidates.max(2), path);
+    settings.finalists = args.finalists.max(1);
+    settings.seed = args.seed;
+    let (_ctx, mut renderer) = start_gl(&options)?;
+    renderer.load_scene(&scene)?;
+    eprintln!(
+        "tune: {} on {}, {} configurations drawn, halving over {:?} frames to {}, {}",
+        scene.name,
+        renderer.caps.renderer,
+        settings.candidates,
+        settings.rung_frames,
+        settings.finalists,
+        if settings.path.len() > 1 {
+            format!("{} poses", settings.path.len())
+        } else {
+            "still camera".into()
+        }
+    );
+    let bar = ProgressBar::new(0);
+    bar.set_style(
+        ProgressStyle::with_template("{prefix}: {bar:30} {pos}/{len}  {msg}")
+            .unwrap_or_else(|_| ProgressStyle::default_bar()),
+    );
+    let result = tune(&mut renderer, &scene, &options, &settings, &bar)?;
+    bar.finish_and_clear();
+    let out = args
+        .out
+        .clone()
+        .unwrap_or_else(|| PathBuf::from(format!("tune-{}", scene.name)));
+    std::fs::create_dir_all(&out).with_context(|| format!("cannot create {}", out.display()))?;
+    let frontier = frontier_table(&result, args.accuracy);
+    let all = bench_table(&result.rows);
+    let rungs: Vec<String> = result
+        .rungs
+        .iter()
+        .map(|r| {
+            format!(
+                "{} configurations × {} frames → {} kept ({:.0} s)",
+                r.configurations, r.frames, r.kept, r.seconds
+            )
+        })
+        .collect();
+    let command = std::env::args().collect::<Vec<_>>().join(" ");
+    let md = format!(
+        "# tune: {}\n\n{}\n\n## Frontier\n\n{}\n## Finalists\n\n{}\n## Search\n\n- {}\n\nRegenerate: `{command}`\n",
+        scene.name,
+        answer(&result, args.accuracy),
+        frontier.to_markdown(),
+        all.to_markdown(),
+        rungs.join("\n- ")
+    );
+    std::fs::write(out.join("tune.md"), &md)?;
+    std::fs::write(
+        out.join("tune.json"),
+        serde_json::to_string_pretty(&result)?,
+    )?;
+    plot::error_vs_time_marked(
+        &result.rows,
+        &result.frontier,
+        &format!("{}: tune finalists (ringed: frontier)", scene.name),
+        &out.join("tune.png"),
+    )
+    .map_err(anyhow::Error::msg)?;
+    println!("{}", frontier.to_markdown());
+    println!("{}", answer(&result, args.accuracy));
+    eprintln!("wrote {}/tune.md, tune.json, tune.png", out.display());
+    Ok(())
+}

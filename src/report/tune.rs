@@ -1,0 +1,382 @@
+//! `tune`: the price of accuracy on one scene. A budgeted search of the option space (technique,
+//! map size, depth bits, filter, offsets, caster faces, omni views; counting, stencil passes,
+//! edge rule, casters; the planner) by successive halving: many random configurations measured
+//! cheaply (few frames), the better half by Pareto rank (error, then time) measured again with
+//! more frames, until a few remain, which are measured in full (round-robin timing, the exact
+//! reference on the first frame, the sampled one along the path). Their Pareto frontier says, for
+//! each step of error, what it costs in time.
+
+use super::bench::{Bench, BenchConfig, BenchRow, BenchSettings};
+use crate::gl::{RenderError, Renderer};
+use crate::options::{OptionError, Options, Technique};
+use crate::scene::Scene;
+use crate::scene::path::PathKey;
+use indicatif::ProgressBar;
+use serde::Serialize;
+use std::collections::{BTreeMap, HashSet};
+use std::time::Instant;
+
+/// One searched option: its key, its values, and the technique it matters to (None: every one).
+#[derive(Debug, Clone)]
+pub struct Dimension {
+    pub key: &'static str,
+    pub values: &'static [&'static str],
+    pub technique: Option<Technique>,
+}
+
+const fn dim(
+    key: &'static str,
+    values: &'static [&'static str],
+    technique: Option<Technique>,
+) -> Dimension {
+    Dimension {
+        key,
+        values,
+        technique,
+    }
+}
+
+const SM: Option<Technique> = Some(Technique::ShadowMap);
+const SV: Option<Technique> = Some(Technique::ShadowVolume);
+
+/// The option space searched: the choices the reports show to matter for time or error.
+pub fn space() -> Vec<Dimension> {
+    vec![
+        dim("shadow_map.size", &["256", "512", "1024", "2048"], SM),
+        dim("shadow_map.depth_bits", &["16", "24", "32f"], SM),
+        dim("shadow_map.filter", &["nearest", "hw2x2", "pcf3x3"], SM),
+        dim("shadow_map.offset_factor", &["0", "1.1", "2", "4"], SM),
+        dim("shadow_map.offset_units", &["0", "4", "16", "64"], SM),
+        dim("shadow_map.cull", &["both", "front", "back"], SM),
+        dim("shadow_map.omni", &["six_spots", "cube"], SM),
+        dim("shadow_volume.counting", &["zfail", "zpass", "auto"], SV),
+        dim("shadow_volume.stencil", &["two_pass", "separate"], SV),
+        dim("shadow_volume.edge_rule", &["paper", "signed"], SV),
+        dim("shadow_volume.casters", &["front", "both"], SV),
+        dim("plan.enabled", &["true", "false"], None),
+    ]
+}
+
+/// The techniques searched.
+pub const TECHNIQUES: [Technique; 2] = [Technique::ShadowMap, Technique::ShadowVolume];
+
+/// A configuration of the space: `base` with the values set; its label names the technique and
+/// the values that differ from `base`.
+fn config_of(base: &Options, sets: &BTreeMap<String, String>) -> Result<BenchConfig, OptionError> {
+    let mut options = base.clone();
+    let mut swept = BTreeMap::new();
+    for (k, v) in sets {
+        options.set(k, v)?;
+        let value = options.get(k)?;
+        if k == "technique" || value != base.get(k)? {
+            swept.insert(k.clone(), value);
+        }
+    }
+    Ok(BenchConfig {
+        name: None,
+        swept,
+        options,
+    })
+}
+
+/// `count` distinct configurations drawn from `space` over `base` (seeded), the first of each
+/// technique its defaults in `base`.
+pub fn candidates(
+    base: &Options,
+    space: &[Dimension],
+    count: usize,
+    seed: u64,
+) -> Result<Vec<BenchConfig>, OptionError> {
+    let mut rng = fastrand::Rng::with_seed(seed);
+    let mut seen = HashSet::new();
+    let mut out = Vec::new();
+    // Distinct by the options they give (two draws may differ only where `base` agrees).
+    let key = |c: &BenchConfig| serde_json::to_string(&c.options).unwrap_or_default();
+    for t in TECHNIQUES {
+        let sets = BTreeMap::from([("technique".to_string(), t.to_string())]);
+        let c = config_of(base, &sets)?;
+        seen.insert(key(&c));
+        out.push(c);
+    }
+    // Stops when the space is exhausted, however large `count` is.
+    let mut tries = 0;
+    while out.len() < count && tries < count * 50 {
+        tries += 1;
+        let t = TECHNIQUES[rng.usize(..TECHNIQUES.len())];
+        let mut sets = BTreeMap::from([("technique".to_string(), t.to_string())]);
+        for d in space
+            .iter()
+            .filter(|d| d.technique.is_none() || d.technique == Some(t))
+        {
+            sets.insert(
+                d.key.to_string(),
+                d.values[rng.usize(..d.values.len())].to_string(),
+            );
+        }
+        let c = config_of(base, &sets)?;
+        if seen.insert(key(&c)) {
+            out.push(c);
+        }
+    }
+    Ok(out)
+}
+
+/// Each point's Pareto rank on (error, time), both lower better: 0 for the points no other
+/// dominates, 1 for those only rank-0 points dominate, and so on.
+pub fn pareto_ranks(points: &[(f64, f64)]) -> Vec<usize> {
+    let dominates =
+        |a: (f64, f64), b: (f64, f64)| a.0 <= b.0 && a.1 <= b.1 && (a.0 < b.0 || a.1 < b.1);
+    let mut rank = vec![usize::MAX; points.len()];
+    let mut r = 0;
+    while rank.contains(&usize::MAX) {
+        let open: Vec<usize> = (0..points.len())
+            .filter(|&i| rank[i] == usize::MAX)
+            .collect();
+        let front: Vec<usize> = open
+            .iter()
+            .copied()
+            .filter(|&i| !open.iter().any(|&j| dominates(points[j], points[i])))
+            .collect();
+        for i in front {
+            rank[i] = r;
+        }
+        r += 1;
+    }
+    rank
+}
+
+/// The indices of the `keep` best points: by Pareto rank, then by error (the nearer the
+/// accuracy end of a front, the later a configuration is dropped), then by time.
+pub fn best(points: &[(f64, f64)], keep: usize) -> Vec<usize> {
+    let rank = pareto_ranks(points);
+    let mut order: Vec<usize> = (0..points.len()).collect();
+    order.sort_by(|&a, &b| {
+        rank[a]
+            .cmp(&rank[b])
+            .then(points[a].0.total_cmp(&points[b].0))
+            .then(points[a].1.total_cmp(&points[b].1))
+    });
+    order.truncate(keep);
+    order.sort();
+    order
+}
+
+/// (error, median frame ms) of a measured row: the exact reference's error on the first frame.
+pub fn point(r: &BenchRow) -> (f64, f64) {
+    (r.error.total, r.frame_ms.median)
+}
+
+/// How the search spends its time.
+#[derive(Debug, Clone, Serialize)]
+pub struct TuneSettings {
+    /// Configurations drawn for the first rung.
+    pub candidates: usize,
+    /// Measured frames per configuration on each rung; the halving stops at the last rung or
+    /// when `finalists` or fewer remain.
+    pub rung_frames: Vec<usize>,
+    /// How many are measured in full at the end.
+    pub finalists: usize,
+    /// Measured frames of the final round (round-robin).
+    pub final_frames: usize,
+    pub seed: u64,
+    /// Camera poses, cycled through.
+    #[serde(skip)]
+    pub path: Vec<PathKey>,
+}
+
+impl TuneSettings {
+    /// A search of `candidates` configurations along `path`.
+    pub fn new(candidates: usize, path: Vec<PathKey>) -> TuneSettings {
+        TuneSettings {
+            candidates,
+            rung_frames: vec![2, 4],
+            finalists: 8,
+            final_frames: 8,
+            seed: 1,
+            path,
+        }
+    }
+}
+
+/// What one rung measured.
+#[derive(Debug, Clone, Serialize)]
+pub struct Rung {
+    pub configurations: usize,
+    pub frames: usize,
+    pub kept: usize,
+    pub seconds: f64,
+}
+
+/// The search's outcome: the finalists measured in full and which of them are on the frontier.
+#[derive(Debug, Clone, Serialize)]
+pub struct TuneResult {
+    pub scene: String,
+    pub settings: TuneSettings,
+    pub rungs: Vec<Rung>,
+    pub rows: Vec<BenchRow>,
+    /// Per row, whether it is on the Pareto frontier of the finalists.
+    pub frontier: Vec<bool>,
+}
+
+impl TuneResult {
+    /// The frontier's rows, fastest first.
+    pub fn frontier_rows(&self) -> Vec<&BenchRow> {
+        let mut f: Vec<&BenchRow> = self
+            .rows
+            .iter()
+            .zip(&self.frontier)
+            .filter(|(_, on)| **on)
+            .map(|(r, _)| r)
+            .collect();
+        f.sort_by(|a, b| a.frame_ms.median.total_cmp(&b.frame_ms.median));
+        f
+    }
+
+    /// The fastest frontier configuration whose error is at most `accuracy` percent.
+    pub fn cheapest_meeting(&self, accuracy: f64) -> Option<&BenchRow> {
+        self.frontier_rows()
+            .into_iter()
+            .find(|r| 100.0 * r.error.total <= accuracy)
+    }
+}
+
+/// Measures `configs` with `frames` frames each, one after another (cheap rungs) or round-robin.
+fn measure(
+    renderer: &mut Renderer,
+    scene: &Scene,
+    settings: &TuneSettings,
+    configs: &[BenchConfig],
+    frames: usize,
+    interleave: bool,
+    bar: &ProgressBar,
+) -> Result<Vec<BenchRow>, RenderError> {
+    let bench = BenchSettings {
+        warmup: 1,
+        frames,
+        path: settings.path.clone(),
+        progress: false,
+        interleave,
+    };
+    Bench::new(renderer, scene, bench).run_with(configs, bar)
+}
+
+/// Runs the search on `scene` over `base`.
+pub fn tune(
+    renderer: &mut Renderer,
+    scene: &Scene,
+    base: &Options,
+    settings: &TuneSettings,
+    bar: &ProgressBar,
+) -> Result<TuneResult, TuneError> {
+    let mut base = base.clone();
+    // The halving ranks by the exact error of the first frame; sampling the path is for the
+    // final round only.
+    let samples = base.estimate.samples;
+    base.estimate.samples = 0;
+    let mut configs = candidates(&base, &space(), settings.candidates, settings.seed)?;
+    let mut rungs = Vec::new();
+    for &frames in &settings.rung_frames {
+        if configs.len() <= settings.finalists {
+            break;
+        }
+        let start = Instant::now();
+        bar.set_length(configs.len() as u64);
+        bar.set_position(0);
+        bar.set_prefix(format!("rung {}: {frames} frames", rungs.len() + 1));
+        let rows = measure(renderer, scene, settings, &configs, frames, false, bar)?;
+        let points: Vec<(f64, f64)> = rows.iter().map(point).collect();
+        let keep = (configs.len() / 2).max(settings.finalists);
+        let kept = best(&points, keep);
+        rungs.push(Rung {
+            configurations: configs.len(),
+            frames,
+            kept: kept.len(),
+            seconds: start.elapsed().as_secs_f64(),
+        });
+        configs = kept.into_iter().map(|i| configs[i].clone()).collect();
+    }
+    if configs.len() > settings.finalists {
+        // The last rung's order already holds: keep its best.
+        configs.truncate(settings.finalists);
+    }
+    for c in &mut configs {
+        c.options.estimate.samples = samples;
+    }
+    let start = Instant::now();
+    bar.set_length(configs.len() as u64);
+    bar.set_position(0);
+    bar.set_prefix("final, round-robin");
+    let rows = measure(
+        renderer,
+        scene,
+        settings,
+        &configs,
+        settings.final_frames,
+        true,
+        bar,
+    )?;
+    rungs.push(Rung {
+        configurations: configs.len(),
+        frames: settings.final_frames,
+        kept: configs.len(),
+        seconds: start.elapsed().as_secs_f64(),
+    });
+    let ranks = pareto_ranks(&rows.iter().map(point).collect::<Vec<_>>());
+    Ok(TuneResult {
+        scene: scene.name.clone(),
+        settings: settings.clone(),
+        rungs,
+        frontier: ranks.iter().map(|r| *r == 0).collect(),
+        rows,
+    })
+}
+
+#[derive(Debug, thiserror::Error)]
+pub enum TuneError {
+    #[error(transparent)]
+    Render(#[from] RenderError),
+    #[error(transparent)]
+    Option(#[from] OptionError),
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn ranks_peel_fronts_in_order() {
+        // (error, time): a and b trade off, c is dominated by a only, d by all.
+        let pts = [(0.1, 5.0), (0.5, 1.0), (0.2, 6.0), (0.6, 7.0)];
+        assert_eq!(pareto_ranks(&pts), vec![0, 0, 1, 2]);
+        // Equal points dominate neither.
+        assert_eq!(pareto_ranks(&[(1.0, 1.0), (1.0, 1.0)]), vec![0, 0]);
+        assert_eq!(best(&pts, 3), vec![0, 1, 2]);
+        assert_eq!(best(&pts, 1), vec![0]);
+    }
+
+    #[test]
+    fn candidates_are_distinct_and_set_only_their_techniques_options() {
+        let base = Options::default();
+        let c = candidates(&base, &space(), 40, 3).unwrap();
+        assert_eq!(c.len(), 40);
+        assert_eq!(c[0].options.technique, Technique::ShadowMap);
+        assert_eq!(c[0].swept.len(), 1);
+        let mut seen = HashSet::new();
+        for k in &c {
+            let options = serde_json::to_string(&k.options).unwrap();
+            assert!(seen.insert(options), "{:?} twice", k.swept);
+            let t = k.options.technique;
+            for key in k.swept.keys() {
+                let other = if t == Technique::ShadowMap {
+                    "shadow_volume."
+                } else {
+                    "shadow_map."
+                };
+                assert!(!key.starts_with(other), "{t} sets {key}");
+            }
+        }
+        // The same seed, the same draw.
+        let again = candidates(&base, &space(), 40, 3).unwrap();
+        assert!(c.iter().zip(&again).all(|(a, b)| a.swept == b.swept));
+    }
+}
