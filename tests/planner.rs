@@ -843,7 +843,7 @@ fn auto_picks_per_light_from_measured_cost_and_the_accuracy_target() {
         assert!(
             why.contains("shadow_volume (")
                 && why.contains("shadow_map ~0.41% (estimated)")
-                && why.ends_with("misses it"),
+                && why.ends_with("misses it)"),
             "{why}"
         );
     }

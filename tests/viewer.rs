@@ -17,8 +17,8 @@ fn shots() -> PathBuf {
 }
 
 /// Runs `shadowlab view` with `script` under a virtual X server; panics with its output unless
-/// it exits with status 0.
-fn view(scene: Option<&str>, script: &str, name: &str) {
+/// it exits with status 0; returns its standard output.
+fn view(scene: Option<&str>, script: &str, name: &str) -> String {
     let which = Command::new("sh")
         .args(["-c", "command -v xvfb-run"])
         .output()
@@ -49,6 +49,7 @@ fn view(scene: Option<&str>, script: &str, name: &str) {
         String::from_utf8_lossy(&out.stdout),
         String::from_utf8_lossy(&out.stderr)
     );
+    String::from_utf8_lossy(&out.stdout).into_owned()
 }
 
 fn load(p: &Path) -> RgbaImage {
@@ -171,12 +172,13 @@ fn the_viewer_drives_the_builtin_scene_and_oa_dm1_from_scripts() {
         })
         .collect();
     std::fs::write(&path, poses).unwrap();
-    view(
+    let out = view(
         Some("assets/scenes/oa_dm1.toml"),
         &format!(
             "replay {}\nset technique=shadow_map\nwait 2\nframe {}\nset technique=shadow_volume\n\
              wait 2\nframe {}\noverlay volumes on\noverlay silhouettes on\nwait 3\nframe {}\n\
-             screenshot {}\nquit\n",
+             screenshot {}\noverlay volumes off\noverlay silhouettes off\n\
+             overlay estimate on\nwait 30\nquit\n",
             path.display(),
             p("oa_dm1-frame-maps.png"),
             p("oa_dm1-frame-volumes.png"),
@@ -198,4 +200,27 @@ fn the_viewer_drives_the_builtin_scene_and_oa_dm1_from_scripts() {
     // (a twentieth at least: the planner's depth-pass pieces have no caps to show, only sides).
     assert!(technique_px > 0 && technique_px < total / 5);
     assert!(overlay_px > total / 20);
+    // The live error ran on the frames after `overlay estimate on`: every light of oa_dm1's
+    // view sampled under volumes, each estimate pooled over frames with an interval that holds
+    // volumes' error there (0.013% on the full reference of the first bench frame).
+    let lines: Vec<&str> = out.lines().filter(|l| l.starts_with("live error:")).collect();
+    println!("{}", lines.join("\n"));
+    assert!(!lines.is_empty(), "no live error printed: {out}");
+    for l in &lines {
+        assert!(l.contains("shadow_volume"), "{l}");
+        let frames: usize = l
+            .rsplit("over ")
+            .next()
+            .and_then(|s| s.split(' ').next())
+            .and_then(|s| s.parse().ok())
+            .unwrap_or(0);
+        assert!(frames >= 2, "{l}");
+        let low: f64 = l
+            .split('[')
+            .nth(1)
+            .and_then(|s| s.split('%').next())
+            .and_then(|s| s.parse().ok())
+            .unwrap_or(1.0);
+        assert!(low < 0.05, "{l}");
+    }
 }

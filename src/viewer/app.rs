@@ -138,6 +138,7 @@ impl App {
         state.advance_camera(dt);
         if state.needs_upload {
             r.renderer.load_scene(&state.scene)?;
+            state.live_error.reset();
             state.needs_upload = false;
         }
 
@@ -145,13 +146,18 @@ impl App {
         let mut options = state.options.clone();
         options.width = r.view_size[0];
         options.height = r.view_size[1];
-        let request = state.request();
+        let mut request = state.request();
+        let live = state.live_error.wants_masks(&state.scene) && state.walkthrough.is_none();
+        request.masks |= live;
         match r
             .renderer
             .render_at(&state.scene, &state.camera, &options, request)
         {
             Ok(frame) => {
-                if request.masks && state.error_job.is_none() {
+                if live && let Some(s) = state.live_error.sample(&state.scene, &frame, &options) {
+                    r.renderer.record_errors(&s.per_light, &options);
+                }
+                if request.masks && state.view == ViewMode::Error && state.error_job.is_none() {
                     state.error_job = Some(ErrorJob::start(
                         state.scene.clone(),
                         &frame,
@@ -315,6 +321,19 @@ impl ApplicationHandler for App {
     fn exiting(&mut self, _: &ActiveEventLoop) {
         if let Some(r) = self.running.as_mut() {
             r.egui.destroy();
+        }
+        // What the live error last said, for scripts and whoever closes the window.
+        if let Some(state) = self.state.as_ref().filter(|s| s.live_error.on) {
+            for (light, e) in state.live_error.lights() {
+                println!(
+                    "live error: light {light} {} {:.3}% [{:.3}%, {:.3}%] over {} frames",
+                    e.technique.map_or("none".into(), |t| t.to_string()),
+                    100.0 * e.error.value,
+                    100.0 * e.error.low,
+                    100.0 * e.error.high,
+                    e.frames
+                );
+            }
         }
     }
 }

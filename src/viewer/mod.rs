@@ -6,6 +6,7 @@
 pub mod edit;
 pub mod error_job;
 pub mod fly;
+pub mod live_error;
 pub mod option_panel;
 pub mod script;
 pub mod state;

@@ -60,6 +60,8 @@ pub enum Toggle {
     Texels,
     Timings,
     Help,
+    /// The live sampled error.
+    Estimate,
 }
 
 #[derive(Debug, Clone, PartialEq)]
@@ -152,7 +154,12 @@ fn parse_line(line: &str) -> Result<Option<Command>, String> {
                 Some("texels") => Toggle::Texels,
                 Some("timings") => Toggle::Timings,
                 Some("help") => Toggle::Help,
-                _ => return Err("expected overlay volumes|silhouettes|texels|timings|help".into()),
+                Some("estimate") => Toggle::Estimate,
+                _ => {
+                    return Err(
+                        "expected overlay volumes|silhouettes|texels|timings|help|estimate".into(),
+                    );
+                }
             };
             Command::Overlay(toggle, on_off(args.get(1).copied().unwrap_or("on"))?)
         }

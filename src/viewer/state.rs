@@ -78,6 +78,8 @@ pub struct ViewerState {
     pub script: VecDeque<Command>,
     wait: usize,
     pub error_job: Option<ErrorJob>,
+    /// Each frame sampled against the exact reference as it runs (E).
+    pub live_error: super::live_error::LiveError,
     pub error_result: Option<(u64, ErrorResult)>,
     /// A script's `error` waits for the job.
     error_blocks: bool,
@@ -115,6 +117,7 @@ impl ViewerState {
             // The first frame is complete before a script acts (the walkthrough needs its steps).
             wait: 1,
             error_job: None,
+            live_error: Default::default(),
             error_result: None,
             error_blocks: false,
             status: String::new(),
@@ -244,6 +247,7 @@ impl ViewerState {
             Toggle::Texels => self.overlays.texel_grid = on,
             Toggle::Timings => self.show_timings = on,
             Toggle::Help => self.show_help = on,
+            Toggle::Estimate => self.live_error.on = on,
         }
     }
 

@@ -45,6 +45,10 @@ pub const HELP: &[(&str, &str)] = &[
     ),
     ("F8", "compute the error image against the exact reference"),
     (
+        "E",
+        "live error: each frame's masks sampled against the exact reference, per light",
+    ),
+    (
         "F9",
         "record the camera path (again: stop and save camera-path.txt)",
     ),
@@ -127,6 +131,9 @@ fn keys(ctx: &egui::Context, state: &mut ViewerState) {
     if pressed(Key::F8) {
         state.view = ViewMode::Error;
     }
+    if pressed(Key::E) {
+        state.live_error.on = !state.live_error.on;
+    }
     if pressed(Key::F9) {
         let next = state.recording.is_none().then(|| "camera-path.txt".into());
         if let Err(e) = state.record(next) {
@@ -149,6 +156,43 @@ fn keys(ctx: &egui::Context, state: &mut ViewerState) {
     if pressed(Key::Escape) {
         state.quit = true;
     }
+}
+
+/// Each light's running sampled error, the frame's and what the sampling cost.
+fn live_error(ui: &mut egui::Ui, state: &ViewerState) {
+    let live = &state.live_error;
+    if live.building() {
+        ui.label("building the reference (a BVH of the casters)…");
+        return;
+    }
+    let Some(frame) = &live.last_frame else {
+        ui.label("waiting for a frame with masks…");
+        return;
+    };
+    let pct = |x: f64| format!("{:.2}%", 100.0 * x);
+    let o = &state.options.estimate;
+    ui.label(format!(
+        "frame: {} [{}, {}], {} rays in {:.1} ms; lights over {} frames:",
+        pct(frame.total.value),
+        pct(frame.total.low),
+        pct(frame.total.high),
+        frame.rays,
+        live.trace_ms,
+        o.window
+    ));
+    egui::Grid::new("live_error").striped(true).show(ui, |ui| {
+        for (light, e) in live.lights() {
+            ui.label(format!("light {light}"));
+            ui.label(e.technique.map_or("–".into(), |t| t.to_string()));
+            ui.label(format!(
+                "{} ± {}",
+                pct(e.error.value),
+                pct((e.error.high - e.error.low) / 2.0)
+            ));
+            ui.label(format!("{} frames", e.frames));
+            ui.end_row();
+        }
+    });
 }
 
 fn technique_combo(ui: &mut egui::Ui, id: &str, value: &mut Option<Technique>, default: &str) {
@@ -679,6 +723,11 @@ pub fn draw(
                 ui.label(egui::RichText::new(e.gl_state).monospace().small());
                 ui.label("Page Up / Page Down to step, F7 to leave");
             });
+    }
+    if state.live_error.on {
+        egui::Window::new("live error (sampled reference)")
+            .default_pos(Pos2::new(10.0, ctx.content_rect().bottom() - 200.0))
+            .show(&ctx, |ui| live_error(ui, state));
     }
     if state.view == ViewMode::Error {
         egui::Window::new("error against the exact reference")

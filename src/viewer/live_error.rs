@@ -1,0 +1,136 @@
+//! The viewer's live error: each frame's masks sampled against the exact reference
+//! (`truth::sampled`) as the frames run, each light's estimate pooled over the last
+//! `estimate.window` frames. The reference (a BVH of the scene's casters) is built once on a
+//! worker thread; until it is ready the overlay says so.
+
+use crate::options::{Options, Technique};
+use crate::scene::Scene;
+use crate::truth::Reference;
+use crate::truth::sampled::{FrameSample, Interval, Running, sample_frame};
+use std::collections::{BTreeMap, HashMap};
+use std::sync::Arc;
+use std::thread::JoinHandle;
+use std::time::Instant;
+
+/// A light's running estimate and the technique it ran with.
+#[derive(Debug, Clone)]
+pub struct LightEstimate {
+    pub technique: Option<Technique>,
+    pub error: Interval,
+    /// Frames pooled.
+    pub frames: usize,
+}
+
+#[derive(Default)]
+pub struct LiveError {
+    pub on: bool,
+    reference: Option<Arc<Reference>>,
+    building: Option<JoinHandle<Reference>>,
+    /// Per light and technique, the last frames' samples.
+    running: HashMap<(usize, Option<Technique>), Running>,
+    /// The technique each light ran with in the last sampled frame.
+    last: BTreeMap<usize, Option<Technique>>,
+    frames: u64,
+    /// Milliseconds the last frame's tracing took.
+    pub trace_ms: f64,
+    /// The last frame's sample, all lights.
+    pub last_frame: Option<FrameSample>,
+    /// The options the estimates were taken under (a change starts them again).
+    options: String,
+}
+
+impl LiveError {
+    /// Whether frames should be drawn with masks for sampling.
+    pub fn wants_masks(&mut self, scene: &Arc<Scene>) -> bool {
+        if !self.on {
+            return false;
+        }
+        if self.reference.is_none() && self.building.is_none() {
+            let scene = scene.clone();
+            self.building = Some(std::thread::spawn(move || Reference::build(&scene)));
+        }
+        if self.building.as_ref().is_some_and(|h| h.is_finished())
+            && let Some(h) = self.building.take()
+        {
+            self.reference = h.join().ok().map(Arc::new);
+        }
+        self.reference.is_some()
+    }
+
+    /// Whether the reference is still being built.
+    pub fn building(&self) -> bool {
+        self.building.is_some()
+    }
+
+    /// Forgets the reference (the scene's surfaces changed) and the estimates.
+    pub fn reset(&mut self) {
+        self.reference = None;
+        self.building = None;
+        self.running.clear();
+        self.last.clear();
+        self.last_frame = None;
+    }
+
+    /// Samples a frame drawn with masks; `techniques` are what each light ran with. Returns the
+    /// frame's samples per light, for `auto`.
+    pub fn sample(
+        &mut self,
+        scene: &Scene,
+        frame: &crate::frame::Frame,
+        options: &Options,
+    ) -> Option<&FrameSample> {
+        let reference = self.reference.as_ref()?;
+        let gbuffer = frame.gbuffer.as_ref()?;
+        let text = serde_json::to_string(options).unwrap_or_default();
+        if text != self.options {
+            self.running.clear();
+            self.options = text;
+        }
+        let start = Instant::now();
+        let s = sample_frame(
+            reference,
+            gbuffer,
+            &scene.lights,
+            &frame.masks,
+            options.estimate.samples as usize,
+            u64::from(options.estimate.seed),
+            self.frames,
+        );
+        self.trace_ms = start.elapsed().as_secs_f64() * 1e3;
+        self.frames += 1;
+        let techniques: BTreeMap<usize, Technique> = frame
+            .steps
+            .iter()
+            .filter_map(|st| Some((st.light?, st.technique?)))
+            .collect();
+        self.last.clear();
+        for l in &s.per_light {
+            let t = techniques.get(&l.light).copied();
+            self.last.insert(l.light, t);
+            self.running
+                .entry((l.light, t))
+                .or_insert_with(|| Running::new(options.estimate.window as usize))
+                .push(*l);
+        }
+        self.last_frame = Some(s);
+        self.last_frame.as_ref()
+    }
+
+    /// Each light of the last sampled frame: its technique and its running estimate.
+    pub fn lights(&self) -> Vec<(usize, LightEstimate)> {
+        self.last
+            .iter()
+            .filter_map(|(&light, &technique)| {
+                let r = self.running.get(&(light, technique))?;
+                Some((
+                    light,
+                    LightEstimate {
+                        technique,
+                        error: r.estimate()?,
+                        frames: r.frames(),
+                    },
+                ))
+            })
+            .collect()
+    }
+}
