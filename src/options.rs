@@ -738,6 +738,11 @@ define_options! {
         seed: u32 = 1;
         /// Frames pooled into a light's running estimate (the viewer's overlay, `auto`).
         window: u32 = 8, in 1 ..= 4096;
+        /// Share of frame time the viewer's live error may spend drawing masks and tracing
+        /// samples: it samples a frame whenever its spending so far is under this share of
+        /// the frames' time (every frame where masks are cheap; on llvmpipe, where a frame's
+        /// masks cost about as much as the frame, one frame in ten or so).
+        budget: f32 = 0.1, in 0.0 ..= 10.0;
         /// `auto` leaves a light's measured technique for another that meets `accuracy` only
         /// when that one is cheaper by more than this share of the current one's time, so that
         /// noise in the pass times does not flip it back and forth.

@@ -37,6 +37,7 @@ fn quick_report_measures_every_section_and_writes_it() {
         "claim-sm-lights",
         "claim-sv-lights",
         "sweep-oa_dm1",
+        "frontier-oa_dm1",
     ] {
         let s = report
             .section(id)
@@ -48,6 +49,17 @@ fn quick_report_measures_every_section_and_writes_it() {
                 .unwrap_or(0);
             assert!(size > 1000, "{id}: {} missing or empty", f.file);
         }
+    }
+    // The frontier: at least one configuration, fastest first, none dominating another.
+    let frontier = &report.section("frontier-oa_dm1").unwrap().tables[0];
+    assert!(!frontier.rows.is_empty());
+    let cell = |r: &Vec<String>, i: usize| -> f64 {
+        r[i].trim_end_matches('%').parse().unwrap_or(f64::NAN)
+    };
+    for pair in frontier.rows.windows(2) {
+        // Slower but less accurate would be dominated (the cells are rounded: ties pass).
+        assert!(cell(&pair[0], 1) <= cell(&pair[1], 1), "{pair:?}");
+        assert!(cell(&pair[0], 3) >= cell(&pair[1], 3), "{pair:?}");
     }
     let html = std::fs::read_to_string(out.join("index.html")).unwrap();
     let md = std::fs::read_to_string(out.join("index.md")).unwrap();

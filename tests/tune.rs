@@ -50,6 +50,7 @@ fn the_frontier_holds_a_configuration_no_point_of_the_fixed_sweep_dominates() {
             path,
             progress: false,
             interleave: true,
+            breakdown: true,
         },
     )
     .run_with(&all, &hidden)

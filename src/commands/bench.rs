@@ -97,6 +97,7 @@ pub fn run(common: &CommonArgs, args: &Args) -> Result<()> {
         path: keys,
         progress: true,
         interleave: !args.sequential,
+        breakdown: true,
     };
     let rows = Bench::new(&mut renderer, &scene, settings).run(&configs)?;
     println!("{}", table::markdown(&rows));

@@ -148,7 +148,11 @@ pub fn run(common: &CommonArgs, args: &Args) -> Result<()> {
             )
         })
         .collect();
-    let command = std::env::args().collect::<Vec<_>>().join(" ");
+    // The command as a person would type it (the binary by its name, not its path).
+    let command = std::iter::once("shadowlab".to_string())
+        .chain(std::env::args().skip(1))
+        .collect::<Vec<_>>()
+        .join(" ");
     let md = format!(
         "# tune: {}\n\n{}\n\n## Frontier\n\n{}\n## Finalists\n\n{}\n## Search\n\n- {}\n\nRegenerate: `{command}`\n",
         scene.name,

@@ -41,6 +41,9 @@ pub struct BenchSettings {
     /// frame of each in turn), so that a slow drift of the machine's speed falls on all of them
     /// alike and the ratios hold; else one configuration after another on one renderer.
     pub interleave: bool,
+    /// Time `PASS_FRAMES` more frames pass by pass for each configuration's breakdown
+    /// (`pass_ms`); `tune`'s cheap rungs go without.
+    pub breakdown: bool,
 }
 
 /// One point of a sweep.
@@ -340,7 +343,12 @@ fn pass_breakdown(
         passes: BTreeMap::new(),
         clock: "cpu",
     };
-    for i in 0..settings.frames.clamp(1, PASS_FRAMES) {
+    let frames = if settings.breakdown {
+        settings.frames.clamp(1, PASS_FRAMES)
+    } else {
+        0
+    };
+    for i in 0..frames {
         let camera = settings.path[i % settings.path.len()].apply(&scene.camera);
         let f = renderer.render_at(scene, &camera, options, FrameRequest::default())?;
         for (name, ms) in pass_totals(&f) {

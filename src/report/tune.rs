@@ -256,6 +256,8 @@ fn measure(
         path: settings.path.clone(),
         progress: false,
         interleave,
+        // The rungs rank by frame time and error only; the finalists' rows keep the passes.
+        breakdown: interleave,
     };
     Bench::new(renderer, scene, bench).run_with(configs, bar)
 }

@@ -147,16 +147,24 @@ impl App {
         options.width = r.view_size[0];
         options.height = r.view_size[1];
         let mut request = state.request();
-        let live = state.live_error.wants_masks(&state.scene) && state.walkthrough.is_none();
+        let budget = f64::from(options.estimate.budget);
+        let live =
+            state.walkthrough.is_none() && state.live_error.wants_masks(&state.scene, budget);
         request.masks |= live;
+        let start = Instant::now();
         match r
             .renderer
             .render_at(&state.scene, &state.camera, &options, request)
         {
             Ok(frame) => {
+                // Masks are drawn after the timed frame: the rest of the call is their cost.
+                let masks_ms = start.elapsed().as_secs_f64() * 1e3 - frame.frame_ms;
+                let mut sampling_ms = 0.0;
                 if live && let Some(s) = state.live_error.sample(&state.scene, &frame, &options) {
                     r.renderer.record_errors(&s.per_light, &options);
+                    sampling_ms = masks_ms.max(0.0) + state.live_error.trace_ms;
                 }
+                state.live_error.spend(frame.frame_ms, sampling_ms);
                 if request.masks && state.view == ViewMode::Error && state.error_job.is_none() {
                     state.error_job = Some(ErrorJob::start(
                         state.scene.clone(),

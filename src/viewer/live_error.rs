@@ -37,12 +37,18 @@ pub struct LiveError {
     pub last_frame: Option<FrameSample>,
     /// The options the estimates were taken under (a change starts them again).
     options: String,
+    /// Milliseconds of frames and of sampling (masks and tracing) since it was turned on.
+    frame_ms: f64,
+    sampling_ms: f64,
 }
 
 impl LiveError {
-    /// Whether frames should be drawn with masks for sampling.
-    pub fn wants_masks(&mut self, scene: &Arc<Scene>) -> bool {
+    /// Whether this frame should be drawn with masks for sampling: on, the reference built,
+    /// and the sampling so far under `budget` times the frames' time.
+    pub fn wants_masks(&mut self, scene: &Arc<Scene>, budget: f64) -> bool {
         if !self.on {
+            self.frame_ms = 0.0;
+            self.sampling_ms = 0.0;
             return false;
         }
         if self.reference.is_none() && self.building.is_none() {
@@ -54,7 +60,22 @@ impl LiveError {
         {
             self.reference = h.join().ok().map(Arc::new);
         }
-        self.reference.is_some()
+        self.reference.is_some() && self.sampling_ms <= budget * self.frame_ms
+    }
+
+    /// Counts a frame's time and what sampling it cost (0 when it was not sampled).
+    pub fn spend(&mut self, frame_ms: f64, sampling_ms: f64) {
+        self.frame_ms += frame_ms;
+        self.sampling_ms += sampling_ms;
+    }
+
+    /// The share of frame time spent sampling since it was turned on.
+    pub fn share(&self) -> f64 {
+        if self.frame_ms > 0.0 {
+            self.sampling_ms / self.frame_ms
+        } else {
+            0.0
+        }
     }
 
     /// Whether the reference is still being built.

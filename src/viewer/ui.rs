@@ -172,12 +172,17 @@ fn live_error(ui: &mut egui::Ui, state: &ViewerState) {
     let pct = |x: f64| format!("{:.2}%", 100.0 * x);
     let o = &state.options.estimate;
     ui.label(format!(
-        "frame: {} [{}, {}], {} rays in {:.1} ms; lights over {} frames:",
+        "last sampled frame: {} [{}, {}], {} rays in {:.1} ms",
         pct(frame.total.value),
         pct(frame.total.low),
         pct(frame.total.high),
         frame.rays,
         live.trace_ms,
+    ));
+    ui.label(format!(
+        "sampling costs {} of frame time (estimate.budget {}); lights over {} sampled frames:",
+        pct(live.share()),
+        pct(f64::from(o.budget)),
         o.window
     ));
     egui::Grid::new("live_error").striped(true).show(ui, |ui| {

@@ -48,6 +48,7 @@ impl<'a> Lab<'a> {
                 progress: false,
                 // The figures' sweeps are long; one renderer keeps their memory bounded.
                 interleave: false,
+                breakdown: true,
             },
         );
         Lab {
