@@ -24,6 +24,7 @@ fn the_frontier_holds_a_configuration_no_point_of_the_fixed_sweep_dominates() {
     settings.rung_frames = vec![2, 3];
     settings.finalists = 6;
     settings.final_frames = 5;
+    settings.per_light = false;
     let hidden = ProgressBar::hidden();
     let result = tune(&mut renderer, &scene, &base, &settings, &hidden).unwrap();
     let frontier: Vec<_> = result.frontier_rows().into_iter().cloned().collect();

@@ -18,7 +18,9 @@ pub struct Args {
     /// Unmeasured frames before each configuration.
     #[arg(long, default_value_t = 3)]
     warmup: usize,
-    /// Measured frames per configuration (default: 10, or one lap of --path).
+    /// Measured frames per configuration (default: 10, or one lap of --path). Each is also
+    /// sampled against the exact reference afterwards, untimed (`estimate.samples` pixels per
+    /// light; `--set estimate.samples=0` skips it).
     #[arg(long)]
     frames: Option<usize>,
     /// Camera path: `turn` (360° in place over 128 frames, DarkPlaces' timerefresh) or a

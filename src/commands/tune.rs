@@ -34,6 +34,10 @@ pub struct Args {
     /// absent.
     #[arg(long)]
     path: Option<String>,
+    /// Skip the per-light measurement (each light's cheapest map size and filter, or volumes,
+    /// within the target).
+    #[arg(long)]
+    no_per_light: bool,
     /// Folder for tune.md, tune.json and tune.png (default: tune-<scene>).
     #[arg(long)]
     out: Option<PathBuf>,
@@ -76,6 +80,34 @@ fn frontier_table(result: &TuneResult, accuracy: f64) -> Table {
     t
 }
 
+/// Each light's cheapest configuration of the per-light grid within the target.
+fn per_light_table(result: &TuneResult) -> Table {
+    let mut t = Table::new(&[
+        ("light", Align::Right),
+        ("cheapest within the target", Align::Left),
+        ("its error %", Align::Right),
+        ("its passes ms", Align::Right),
+    ]);
+    for c in &result.per_light {
+        t.push(vec![
+            c.light.to_string(),
+            if c.meets {
+                c.label.clone()
+            } else {
+                format!("none meets it; the most accurate: {}", c.label)
+            },
+            format!("{:.3}", 100.0 * c.error),
+            format!("{:.2}", c.ms),
+        ]);
+    }
+    t.note = Some(
+        "Per light: shadow volumes, and shadow maps at 256–2048 with nearest, hw2x2 and pcf3x3 \
+         filters, each light judged by its own error (exact, first frame) and its own passes."
+            .into(),
+    );
+    t
+}
+
 fn answer(result: &TuneResult, accuracy: f64) -> String {
     match result.cheapest_meeting(accuracy) {
         Some(r) => format!(
@@ -109,6 +141,8 @@ pub fn run(common: &CommonArgs, args: &Args) -> Result<()> {
     let mut settings = TuneSettings::new(args.candidates.max(2), path);
     settings.finalists = args.finalists.max(1);
     settings.seed = args.seed;
+    settings.per_light = !args.no_per_light;
+    settings.accuracy = args.accuracy;
     let (_ctx, mut renderer) = start_gl(&options)?;
     renderer.load_scene(&scene)?;
     eprintln!(
@@ -142,9 +176,14 @@ pub fn run(common: &CommonArgs, args: &Args) -> Result<()> {
         .rungs
         .iter()
         .map(|r| {
+            let outcome = if r.stage == "per light" {
+                format!("{} lights answered", r.kept)
+            } else {
+                format!("{} kept", r.kept)
+            };
             format!(
-                "{} configurations × {} frames → {} kept ({:.0} s)",
-                r.configurations, r.frames, r.kept, r.seconds
+                "{}: {} configurations × {} frames → {outcome} ({:.0} s)",
+                r.stage, r.configurations, r.frames, r.seconds
             )
         })
         .collect();
@@ -153,8 +192,16 @@ pub fn run(common: &CommonArgs, args: &Args) -> Result<()> {
         .chain(std::env::args().skip(1))
         .collect::<Vec<_>>()
         .join(" ");
+    let lights = if result.per_light.is_empty() {
+        String::new()
+    } else {
+        format!(
+            "## Per light\n\n{}\n",
+            per_light_table(&result).to_markdown()
+        )
+    };
     let md = format!(
-        "# tune: {}\n\n{}\n\n## Frontier\n\n{}\n## Finalists\n\n{}\n## Search\n\n- {}\n\nRegenerate: `{command}`\n",
+        "# tune: {}\n\n{}\n\n## Frontier\n\n{}\n{lights}## Finalists\n\n{}\n## Search\n\n- {}\n\nRegenerate: `{command}`\n",
         scene.name,
         answer(&result, args.accuracy),
         frontier.to_markdown(),
@@ -174,6 +221,9 @@ pub fn run(common: &CommonArgs, args: &Args) -> Result<()> {
     )
     .map_err(anyhow::Error::msg)?;
     println!("{}", frontier.to_markdown());
+    if !result.per_light.is_empty() {
+        println!("{}", per_light_table(&result).to_markdown());
+    }
     println!("{}", answer(&result, args.accuracy));
     eprintln!("wrote {}/tune.md, tune.json, tune.png", out.display());
     Ok(())

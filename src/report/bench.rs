@@ -674,6 +674,44 @@ impl<'a> Bench<'a> {
     }
 }
 
+/// A row with a technique, a label, a frame time and an error, everything else empty (unit
+/// tests of what reads rows).
+#[cfg(test)]
+pub(crate) fn test_row(technique: &str, label: &str, ms: f64, error: f64) -> BenchRow {
+    BenchRow {
+        scene: "s".into(),
+        technique: technique.into(),
+        label: label.into(),
+        swept: BTreeMap::new(),
+        options: Options::default(),
+        preset: None,
+        differs_from_paper: Vec::new(),
+        fallbacks: Vec::new(),
+        width: 1,
+        height: 1,
+        lights: 1,
+        frames: 1,
+        frame_ms: MsStats {
+            median: ms,
+            min: ms,
+            max: ms,
+        },
+        shadows_off_frame_ms: Median { median: 1.0 },
+        ratio_to_shadows_off: ms,
+        pass_ms: BTreeMap::new(),
+        clock: "cpu".into(),
+        error: ErrorRow {
+            total: error,
+            ..ErrorRow::default()
+        },
+        error_per_light: Vec::new(),
+        sampled: None,
+        volumes: Vec::new(),
+        plan: Default::default(),
+        cache: Default::default(),
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

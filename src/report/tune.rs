@@ -179,6 +179,11 @@ pub struct TuneSettings {
     /// Measured frames of the final round (round-robin).
     pub final_frames: usize,
     pub seed: u64,
+    /// Also measure, per light, the map sizes and filters of `per_light_configs` and name each
+    /// light's cheapest within `accuracy`.
+    pub per_light: bool,
+    /// The target, in percent of receiver pixels (for the per-light choice).
+    pub accuracy: f64,
     /// Camera poses, cycled through.
     #[serde(skip)]
     pub path: Vec<PathKey>,
@@ -193,6 +198,8 @@ impl TuneSettings {
             finalists: 8,
             final_frames: 8,
             seed: 1,
+            per_light: true,
+            accuracy: 0.5,
             path,
         }
     }
@@ -201,8 +208,11 @@ impl TuneSettings {
 /// What one rung measured.
 #[derive(Debug, Clone, Serialize)]
 pub struct Rung {
+    /// `halving`, `final` or `per light`.
+    pub stage: &'static str,
     pub configurations: usize,
     pub frames: usize,
+    /// Configurations kept for the next stage (per light: lights answered).
     pub kept: usize,
     pub seconds: f64,
 }
@@ -216,6 +226,94 @@ pub struct TuneResult {
     pub rows: Vec<BenchRow>,
     /// Per row, whether it is on the Pareto frontier of the finalists.
     pub frontier: Vec<bool>,
+    /// Per light, the cheapest of `per_light_configs` within the target (when asked for).
+    pub per_light: Vec<LightChoice>,
+}
+
+/// One light's cheapest configuration within the target, by its own error and pass times.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct LightChoice {
+    pub light: usize,
+    pub label: String,
+    /// The light's error against the exact reference on the first frame (a fraction).
+    pub error: f64,
+    /// Median milliseconds of the light's own passes.
+    pub ms: f64,
+    /// False where nothing met the target: then the most accurate.
+    pub meets: bool,
+}
+
+/// Map sizes and filters measured per light.
+const PER_LIGHT_SIZES: [&str; 4] = ["256", "512", "1024", "2048"];
+const PER_LIGHT_FILTERS: [&str; 3] = ["nearest", "hw2x2", "pcf3x3"];
+
+/// The configurations measured per light: shadow volumes as `base` has them, and shadow maps at
+/// every size and filter of the grid.
+pub fn per_light_configs(base: &Options) -> Result<Vec<BenchConfig>, OptionError> {
+    let mut out = vec![config_of(
+        base,
+        &BTreeMap::from([("technique".into(), "shadow_volume".into())]),
+    )?];
+    for size in PER_LIGHT_SIZES {
+        for filter in PER_LIGHT_FILTERS {
+            out.push(config_of(
+                base,
+                &BTreeMap::from([
+                    ("technique".into(), "shadow_map".into()),
+                    ("shadow_map.size".into(), size.into()),
+                    ("shadow_map.filter".into(), filter.into()),
+                ]),
+            )?);
+        }
+    }
+    Ok(out)
+}
+
+/// Milliseconds of light `light`'s own passes in a row (its `light<i>.*` entries).
+pub fn light_ms(row: &BenchRow, light: usize) -> f64 {
+    let prefix = format!("light{light}.");
+    row.pass_ms
+        .iter()
+        .filter(|(k, _)| k.starts_with(&prefix))
+        .map(|(_, ms)| ms)
+        .sum()
+}
+
+/// Per light, among `rows`, the cheapest whose error for that light is at most `target` (a
+/// fraction); the most accurate where none is.
+pub fn per_light_choices(rows: &[BenchRow], target: f64) -> Vec<LightChoice> {
+    let mut lights: Vec<usize> = rows
+        .iter()
+        .flat_map(|r| r.error_per_light.iter().map(|(l, _)| *l))
+        .collect();
+    lights.sort_unstable();
+    lights.dedup();
+    lights
+        .into_iter()
+        .filter_map(|light| {
+            let options: Vec<LightChoice> = rows
+                .iter()
+                .filter_map(|r| {
+                    let (_, e) = r.error_per_light.iter().find(|(l, _)| *l == light)?;
+                    // A light with no receiver in view has nothing to choose.
+                    (e.receiver_pixels > 0).then(|| LightChoice {
+                        light,
+                        label: r.label.clone(),
+                        error: e.total,
+                        ms: light_ms(r, light),
+                        meets: e.total <= target,
+                    })
+                })
+                .collect();
+            let meeting = options
+                .iter()
+                .filter(|c| c.meets)
+                .min_by(|a, b| a.ms.total_cmp(&b.ms));
+            meeting
+                .or_else(|| options.iter().min_by(|a, b| a.error.total_cmp(&b.error)))
+                .cloned()
+        })
+        .collect()
 }
 
 impl TuneResult {
@@ -247,7 +345,7 @@ fn measure(
     settings: &TuneSettings,
     configs: &[BenchConfig],
     frames: usize,
-    interleave: bool,
+    (interleave, breakdown): (bool, bool),
     bar: &ProgressBar,
 ) -> Result<Vec<BenchRow>, RenderError> {
     let bench = BenchSettings {
@@ -256,8 +354,7 @@ fn measure(
         path: settings.path.clone(),
         progress: false,
         interleave,
-        // The rungs rank by frame time and error only; the finalists' rows keep the passes.
-        breakdown: interleave,
+        breakdown,
     };
     Bench::new(renderer, scene, bench).run_with(configs, bar)
 }
@@ -285,11 +382,21 @@ pub fn tune(
         bar.set_length(configs.len() as u64);
         bar.set_position(0);
         bar.set_prefix(format!("rung {}: {frames} frames", rungs.len() + 1));
-        let rows = measure(renderer, scene, settings, &configs, frames, false, bar)?;
+        // The rungs rank by frame time and error only: no pass breakdown.
+        let rows = measure(
+            renderer,
+            scene,
+            settings,
+            &configs,
+            frames,
+            (false, false),
+            bar,
+        )?;
         let points: Vec<(f64, f64)> = rows.iter().map(point).collect();
         let keep = (configs.len() / 2).max(settings.finalists);
         let kept = best(&points, keep);
         rungs.push(Rung {
+            stage: "halving",
             configurations: configs.len(),
             frames,
             kept: kept.len(),
@@ -314,22 +421,52 @@ pub fn tune(
         settings,
         &configs,
         settings.final_frames,
-        true,
+        (true, true),
         bar,
     )?;
     rungs.push(Rung {
+        stage: "final",
         configurations: configs.len(),
         frames: settings.final_frames,
         kept: configs.len(),
         seconds: start.elapsed().as_secs_f64(),
     });
     let ranks = pareto_ranks(&rows.iter().map(point).collect::<Vec<_>>());
+    let per_light = if settings.per_light {
+        let configs = per_light_configs(&base)?;
+        let start = Instant::now();
+        bar.set_length(configs.len() as u64);
+        bar.set_position(0);
+        bar.set_prefix("per light: map sizes and filters");
+        // One after another on one renderer: the passes are timed one by one anyway.
+        let light_rows = measure(
+            renderer,
+            scene,
+            settings,
+            &configs,
+            settings.final_frames,
+            (false, true),
+            bar,
+        )?;
+        let choices = per_light_choices(&light_rows, settings.accuracy / 100.0);
+        rungs.push(Rung {
+            stage: "per light",
+            configurations: configs.len(),
+            frames: settings.final_frames,
+            kept: choices.len(),
+            seconds: start.elapsed().as_secs_f64(),
+        });
+        choices
+    } else {
+        Vec::new()
+    };
     Ok(TuneResult {
         scene: scene.name.clone(),
         settings: settings.clone(),
         rungs,
         frontier: ranks.iter().map(|r| *r == 0).collect(),
         rows,
+        per_light,
     })
 }
 
@@ -354,6 +491,44 @@ mod tests {
         assert_eq!(pareto_ranks(&[(1.0, 1.0), (1.0, 1.0)]), vec![0, 0]);
         assert_eq!(best(&pts, 3), vec![0, 1, 2]);
         assert_eq!(best(&pts, 1), vec![0]);
+    }
+
+    #[test]
+    fn each_light_takes_its_cheapest_configuration_within_the_target() {
+        use crate::report::bench::{ErrorRow, test_row};
+        // (light, error, ms) per light of a row.
+        let row = |label: &str, lights: &[(usize, f64, f64)]| {
+            let mut r = test_row("shadow_map", label, 1.0, 0.0);
+            for &(l, e, ms) in lights {
+                let err = ErrorRow {
+                    receiver_pixels: 100,
+                    total: e,
+                    ..ErrorRow::default()
+                };
+                r.error_per_light.push((l, err));
+                r.pass_ms.insert(format!("light{l}.lit"), ms / 2.0);
+                r.pass_ms.insert(format!("light{l}.shadow_map"), ms / 2.0);
+                // Sums over lights must not count as a light's own.
+                r.pass_ms.insert("lights.lit".into(), 99.0);
+            }
+            r
+        };
+        let rows = [
+            row("small", &[(0, 0.02, 1.0), (1, 0.004, 1.0)]),
+            row("large", &[(0, 0.008, 3.0), (1, 0.001, 3.0)]),
+            row("volumes", &[(0, 0.0001, 5.0), (1, 0.0, 2.0)]),
+        ];
+        let c = per_light_choices(&rows, 0.01);
+        let picks: Vec<(usize, &str, bool)> = c
+            .iter()
+            .map(|c| (c.light, c.label.as_str(), c.meets))
+            .collect();
+        assert_eq!(picks, vec![(0, "large", true), (1, "small", true)]);
+        assert_eq!(c[0].ms, 3.0);
+        // Nothing within 0.001% for light 0: the most accurate.
+        let strict = per_light_choices(&rows, 0.00001);
+        assert_eq!(strict[0].label, "volumes");
+        assert!(!strict[0].meets);
     }
 
     #[test]

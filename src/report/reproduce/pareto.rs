@@ -207,6 +207,7 @@ pub fn frontier(lab: &mut Lab) -> Result<Section, ReproduceError> {
     let base = lab.base.clone();
     let mut settings = TuneSettings::new(candidates, vec![PathKey::of(&scene.camera)]);
     settings.finalists = finalists;
+    settings.per_light = false;
     if lab.quick {
         settings.rung_frames = vec![1];
         settings.final_frames = 1;
@@ -261,43 +262,9 @@ pub fn frontier(lab: &mut Lab) -> Result<Section, ReproduceError> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::options::Options;
-    use crate::report::bench::{ErrorRow, Median, MsStats};
-    use std::collections::BTreeMap;
 
     fn row(technique: &str, ms: f64, error: f64) -> BenchRow {
-        BenchRow {
-            scene: "s".into(),
-            technique: technique.into(),
-            label: format!("{technique} {ms} {error}"),
-            swept: BTreeMap::new(),
-            options: Options::default(),
-            preset: None,
-            differs_from_paper: Vec::new(),
-            fallbacks: Vec::new(),
-            width: 1,
-            height: 1,
-            lights: 1,
-            frames: 1,
-            frame_ms: MsStats {
-                median: ms,
-                min: ms,
-                max: ms,
-            },
-            shadows_off_frame_ms: Median { median: 1.0 },
-            ratio_to_shadows_off: ms,
-            pass_ms: BTreeMap::new(),
-            clock: "cpu".into(),
-            error: ErrorRow {
-                total: error,
-                ..ErrorRow::default()
-            },
-            error_per_light: Vec::new(),
-            sampled: None,
-            volumes: Vec::new(),
-            plan: Default::default(),
-            cache: Default::default(),
-        }
+        crate::report::bench::test_row(technique, &format!("{technique} {ms} {error}"), ms, error)
     }
 
     #[test]
