@@ -732,7 +732,7 @@ define_options! {
     /// along a path), `render --stats`, the viewer's overlay and `auto`'s measured choice.
     group estimate: EstimateOptions {
         /// Receiver pixels traced per light and frame (0: none). With 512, a light's 95%
-        /// interval is about ±2 points at 10% error and under 0.75% when nothing is wrong.
+        /// interval is about ±2.6 points at 10% error and under 0.75% when nothing is wrong.
         samples: u32 = 512, in 0 ..= 1048576;
         /// Seed of the sample positions: the same seed, frame and light draw the same pixels.
         seed: u32 = 1;
