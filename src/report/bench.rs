@@ -17,14 +17,14 @@ use crate::plan::PlanStats;
 use crate::plan::fallback::Fallback;
 use crate::plan::volume_draws::VolumeStats;
 use crate::presets::{Difference, Preset};
+use crate::report::estimate::{gbuffer_of, render_sampled};
 use crate::scene::Scene;
 use crate::scene::path::PathKey;
-use crate::truth::sampled::{FrameSample, Interval, sample_frame};
+use crate::truth::sampled::{FrameSample, Interval};
 use crate::truth::{Counts, ExactMasks};
 use indicatif::{ProgressBar, ProgressStyle};
 use serde::Serialize;
 use std::collections::{BTreeMap, HashMap};
-use std::time::Instant;
 
 /// Frames timed pass by pass for each configuration's breakdown (after its measured frames).
 pub const PASS_FRAMES: usize = 3;
@@ -492,11 +492,9 @@ impl<'a> Bench<'a> {
                 ..FrameRequest::default()
             },
         )?;
-        let gbuffer = frame
-            .gbuffer
-            .as_ref()
-            .ok_or(RenderError::Gl("the renderer returned no G-buffer".into()))?;
-        let m = self.exact.measure(self.scene, gbuffer, &frame.masks);
+        let m = self
+            .exact
+            .measure(self.scene, gbuffer_of(&frame)?, &frame.masks);
         Ok(Capture {
             frame,
             exact: m.exact,
@@ -511,39 +509,19 @@ impl<'a> Bench<'a> {
         &mut self,
         options: &Options,
     ) -> Result<Vec<(FrameSample, f64, f64)>, RenderError> {
-        let n = options.estimate.samples as usize;
-        let seed = u64::from(options.estimate.seed);
         let mut out = Vec::with_capacity(self.settings.frames);
         for i in 0..self.settings.frames.max(1) {
             let camera = self.settings.path[i % self.settings.path.len()].apply(&self.scene.camera);
-            let start = Instant::now();
-            let frame = self.renderer.render_at(
+            let reference = self.exact.reference(self.scene);
+            let s = render_sampled(
+                self.renderer,
                 self.scene,
                 &camera,
                 options,
-                FrameRequest {
-                    masks: true,
-                    frame_only: true,
-                    ..FrameRequest::default()
-                },
-            )?;
-            let masks_ms = (start.elapsed().as_secs_f64() * 1e3 - frame.frame_ms).max(0.0);
-            let gbuffer = frame
-                .gbuffer
-                .as_ref()
-                .ok_or(RenderError::Gl("the renderer returned no G-buffer".into()))?;
-            let reference = self.exact.reference(self.scene);
-            let start = Instant::now();
-            let s = sample_frame(
                 reference,
-                gbuffer,
-                &self.scene.lights,
-                &frame.masks,
-                n,
-                seed,
-                i as u64,
-            );
-            out.push((s, masks_ms, start.elapsed().as_secs_f64() * 1e3));
+                (i as u64, true),
+            )?;
+            out.push((s.sample, s.masks_ms, s.trace_ms));
         }
         Ok(out)
     }

@@ -3,6 +3,7 @@
 
 use crate::frame::Frame;
 use crate::gl::{FrameRequest, RenderError, Renderer};
+use crate::images::GBuffer;
 use crate::options::{Options, Technique};
 use crate::plan::auto::LEARNING_FRAMES;
 use crate::scene::{Camera, Scene};
@@ -17,34 +18,30 @@ pub const LEARNING_SAMPLES: u32 = 4;
 pub struct SampledFrame {
     pub frame: Frame,
     pub sample: FrameSample,
+    /// Milliseconds spent drawing and reading the G-buffer and masks, after the timed frame.
+    pub masks_ms: f64,
     /// Milliseconds spent tracing the samples.
     pub trace_ms: f64,
 }
 
-/// Renders a frame of `scene` from `camera` with its masks, samples them
-/// (`options.estimate.samples` pixels per light; `index` numbers the frame's random streams),
-/// and gives the errors to the renderer's `auto`.
-pub fn sampled_frame(
-    renderer: &mut Renderer,
-    scene: &Scene,
-    camera: &Camera,
-    options: &Options,
-    reference: &Reference,
-    index: u64,
-) -> Result<SampledFrame, RenderError> {
-    let frame = renderer.render_at(
-        scene,
-        camera,
-        options,
-        FrameRequest {
-            masks: true,
-            ..FrameRequest::default()
-        },
-    )?;
-    let gbuffer = frame
+/// The G-buffer of a frame rendered with masks.
+pub fn gbuffer_of(frame: &Frame) -> Result<&GBuffer, RenderError> {
+    frame
         .gbuffer
         .as_ref()
-        .ok_or(RenderError::Gl("the renderer returned no G-buffer".into()))?;
+        .ok_or(RenderError::Gl("the renderer returned no G-buffer".into()))
+}
+
+/// Samples a frame rendered with masks (`options.estimate.samples` pixels per light; `index`
+/// numbers the frame's random streams); also gives the milliseconds the tracing took.
+pub fn sample_masks(
+    reference: &Reference,
+    scene: &Scene,
+    frame: &Frame,
+    options: &Options,
+    index: u64,
+) -> Result<(FrameSample, f64), RenderError> {
+    let gbuffer = gbuffer_of(frame)?;
     let start = Instant::now();
     let sample = sample_frame(
         reference,
@@ -55,13 +52,53 @@ pub fn sampled_frame(
         u64::from(options.estimate.seed),
         index,
     );
-    let trace_ms = start.elapsed().as_secs_f64() * 1e3;
-    renderer.record_errors(&sample.per_light, options);
+    Ok((sample, start.elapsed().as_secs_f64() * 1e3))
+}
+
+/// Renders a frame of `scene` from `camera` with its masks and samples them (see
+/// [`sample_masks`]); `frame_only` times the frame without per-pass timing, as benchmarks do.
+pub fn render_sampled(
+    renderer: &mut Renderer,
+    scene: &Scene,
+    camera: &Camera,
+    options: &Options,
+    reference: &Reference,
+    (index, frame_only): (u64, bool),
+) -> Result<SampledFrame, RenderError> {
+    let start = Instant::now();
+    let frame = renderer.render_at(
+        scene,
+        camera,
+        options,
+        FrameRequest {
+            masks: true,
+            frame_only,
+            ..FrameRequest::default()
+        },
+    )?;
+    // The masks are drawn after the timed frame: the rest of the call is their cost.
+    let masks_ms = (start.elapsed().as_secs_f64() * 1e3 - frame.frame_ms).max(0.0);
+    let (sample, trace_ms) = sample_masks(reference, scene, &frame, options, index)?;
     Ok(SampledFrame {
         frame,
         sample,
+        masks_ms,
         trace_ms,
     })
+}
+
+/// [`render_sampled`] with per-pass timing, giving the errors to the renderer's `auto`.
+pub fn sampled_frame(
+    renderer: &mut Renderer,
+    scene: &Scene,
+    camera: &Camera,
+    options: &Options,
+    reference: &Reference,
+    index: u64,
+) -> Result<SampledFrame, RenderError> {
+    let s = render_sampled(renderer, scene, camera, options, reference, (index, false))?;
+    renderer.record_errors(&s.sample.per_light, options);
+    Ok(s)
 }
 
 /// The frames a one-frame command renders before the one it keeps, so that `auto` has run and

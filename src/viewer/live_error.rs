@@ -4,13 +4,13 @@
 //! worker thread; until it is ready the overlay says so.
 
 use crate::options::{Options, Technique};
+use crate::report::estimate::sample_masks;
 use crate::scene::Scene;
 use crate::truth::Reference;
-use crate::truth::sampled::{FrameSample, Interval, Running, sample_frame};
+use crate::truth::sampled::{FrameSample, Interval, Running};
 use std::collections::{BTreeMap, HashMap};
 use std::sync::Arc;
 use std::thread::JoinHandle;
-use std::time::Instant;
 
 /// A light's running estimate and the technique it ran with.
 #[derive(Debug, Clone)]
@@ -101,23 +101,13 @@ impl LiveError {
         options: &Options,
     ) -> Option<&FrameSample> {
         let reference = self.reference.as_ref()?;
-        let gbuffer = frame.gbuffer.as_ref()?;
         let text = serde_json::to_string(options).unwrap_or_default();
         if text != self.options {
             self.running.clear();
             self.options = text;
         }
-        let start = Instant::now();
-        let s = sample_frame(
-            reference,
-            gbuffer,
-            &scene.lights,
-            &frame.masks,
-            options.estimate.samples as usize,
-            u64::from(options.estimate.seed),
-            self.frames,
-        );
-        self.trace_ms = start.elapsed().as_secs_f64() * 1e3;
+        let (s, trace_ms) = sample_masks(reference, scene, frame, options, self.frames).ok()?;
+        self.trace_ms = trace_ms;
         self.frames += 1;
         let techniques: BTreeMap<usize, Technique> = frame
             .steps
