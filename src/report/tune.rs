@@ -161,6 +161,18 @@ pub fn best(points: &[(f64, f64)], keep: usize) -> Vec<usize> {
     order
 }
 
+/// Who goes on after a rung: the better half (never fewer than `finalists`), or after the last
+/// rung the `finalists` best. Chosen by rank here: `best` returns them in draw order, so cutting
+/// its list afterwards would keep the first drawn, not the best.
+pub fn survivors(points: &[(f64, f64)], last: bool, finalists: usize) -> Vec<usize> {
+    let keep = if last {
+        finalists
+    } else {
+        (points.len() / 2).max(finalists)
+    };
+    best(points, keep)
+}
+
 /// (error, median frame ms) of a measured row: the exact reference's error on the first frame.
 pub fn point(r: &BenchRow) -> (f64, f64) {
     (r.error.total, r.frame_ms.median)
@@ -374,7 +386,7 @@ pub fn tune(
     base.estimate.samples = 0;
     let mut configs = candidates(&base, &space(), settings.candidates, settings.seed)?;
     let mut rungs = Vec::new();
-    for &frames in &settings.rung_frames {
+    for (k, &frames) in settings.rung_frames.iter().enumerate() {
         if configs.len() <= settings.finalists {
             break;
         }
@@ -393,8 +405,8 @@ pub fn tune(
             bar,
         )?;
         let points: Vec<(f64, f64)> = rows.iter().map(point).collect();
-        let keep = (configs.len() / 2).max(settings.finalists);
-        let kept = best(&points, keep);
+        let last = k + 1 == settings.rung_frames.len();
+        let kept = survivors(&points, last, settings.finalists);
         rungs.push(Rung {
             stage: "halving",
             configurations: configs.len(),
@@ -405,7 +417,7 @@ pub fn tune(
         configs = kept.into_iter().map(|i| configs[i].clone()).collect();
     }
     if configs.len() > settings.finalists {
-        // The last rung's order already holds: keep its best.
+        // No rung measured them (`rung_frames` is empty): the first drawn.
         configs.truncate(settings.finalists);
     }
     for c in &mut configs {
@@ -529,6 +541,22 @@ mod tests {
         let strict = per_light_choices(&rows, 0.00001);
         assert_eq!(strict[0].label, "volumes");
         assert!(!strict[0].meets);
+    }
+
+    #[test]
+    fn the_last_rung_keeps_the_best_finalists_not_the_first_drawn() {
+        // The two best points were drawn last.
+        let pts = [
+            (0.5, 9.0),
+            (0.6, 8.0),
+            (0.7, 7.0),
+            (0.8, 6.0),
+            (0.01, 1.0),
+            (0.02, 0.5),
+        ];
+        assert_eq!(survivors(&pts, true, 2), vec![4, 5]);
+        // Before the last: the better half (the front, then the most accurate of the next).
+        assert_eq!(survivors(&pts, false, 2), vec![0, 4, 5]);
     }
 
     #[test]
