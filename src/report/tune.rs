@@ -350,25 +350,49 @@ impl TuneResult {
     }
 }
 
-/// Measures `configs` with `frames` frames each, one after another (cheap rungs) or round-robin.
-fn measure(
+/// How one stage of the search measures.
+struct Stage {
+    name: &'static str,
+    /// Shown on the progress bar.
+    prefix: String,
+    frames: usize,
+    /// Round-robin timing, each configuration on a renderer of its own.
+    interleave: bool,
+    /// The per-pass frames (`pass_ms`).
+    breakdown: bool,
+}
+
+/// Measures `configs` for one stage; the stage's record says how many it kept as all of them
+/// (the caller sets it where it keeps fewer).
+fn measure_stage(
     renderer: &mut Renderer,
     scene: &Scene,
     settings: &TuneSettings,
     configs: &[BenchConfig],
-    frames: usize,
-    (interleave, breakdown): (bool, bool),
+    stage: Stage,
     bar: &ProgressBar,
-) -> Result<Vec<BenchRow>, RenderError> {
+) -> Result<(Vec<BenchRow>, Rung), RenderError> {
+    let start = Instant::now();
+    bar.set_length(configs.len() as u64);
+    bar.set_position(0);
+    bar.set_prefix(stage.prefix);
     let bench = BenchSettings {
         warmup: 1,
-        frames,
+        frames: stage.frames,
         path: settings.path.clone(),
         progress: false,
-        interleave,
-        breakdown,
+        interleave: stage.interleave,
+        breakdown: stage.breakdown,
     };
-    Bench::new(renderer, scene, bench).run_with(configs, bar)
+    let rows = Bench::new(renderer, scene, bench).run_with(configs, bar)?;
+    let rung = Rung {
+        stage: stage.name,
+        configurations: configs.len(),
+        frames: stage.frames,
+        kept: configs.len(),
+        seconds: start.elapsed().as_secs_f64(),
+    };
+    Ok((rows, rung))
 }
 
 /// Runs the search on `scene` over `base`.
@@ -390,30 +414,20 @@ pub fn tune(
         if configs.len() <= settings.finalists {
             break;
         }
-        let start = Instant::now();
-        bar.set_length(configs.len() as u64);
-        bar.set_position(0);
-        bar.set_prefix(format!("rung {}: {frames} frames", rungs.len() + 1));
         // The rungs rank by frame time and error only: no pass breakdown.
-        let rows = measure(
-            renderer,
-            scene,
-            settings,
-            &configs,
+        let stage = Stage {
+            name: "halving",
+            prefix: format!("rung {}: {frames} frames", rungs.len() + 1),
             frames,
-            (false, false),
-            bar,
-        )?;
+            interleave: false,
+            breakdown: false,
+        };
+        let (rows, mut rung) = measure_stage(renderer, scene, settings, &configs, stage, bar)?;
         let points: Vec<(f64, f64)> = rows.iter().map(point).collect();
         let last = k + 1 == settings.rung_frames.len();
         let kept = survivors(&points, last, settings.finalists);
-        rungs.push(Rung {
-            stage: "halving",
-            configurations: configs.len(),
-            frames,
-            kept: kept.len(),
-            seconds: start.elapsed().as_secs_f64(),
-        });
+        rung.kept = kept.len();
+        rungs.push(rung);
         configs = kept.into_iter().map(|i| configs[i].clone()).collect();
     }
     if configs.len() > settings.finalists {
@@ -423,51 +437,31 @@ pub fn tune(
     for c in &mut configs {
         c.options.estimate.samples = samples;
     }
-    let start = Instant::now();
-    bar.set_length(configs.len() as u64);
-    bar.set_position(0);
-    bar.set_prefix("final, round-robin");
-    let rows = measure(
-        renderer,
-        scene,
-        settings,
-        &configs,
-        settings.final_frames,
-        (true, true),
-        bar,
-    )?;
-    rungs.push(Rung {
-        stage: "final",
-        configurations: configs.len(),
+    let stage = Stage {
+        name: "final",
+        prefix: "final, round-robin".into(),
         frames: settings.final_frames,
-        kept: configs.len(),
-        seconds: start.elapsed().as_secs_f64(),
-    });
+        interleave: true,
+        breakdown: true,
+    };
+    let (rows, rung) = measure_stage(renderer, scene, settings, &configs, stage, bar)?;
+    rungs.push(rung);
     let ranks = pareto_ranks(&rows.iter().map(point).collect::<Vec<_>>());
     let per_light = if settings.per_light {
         let configs = per_light_configs(&base)?;
-        let start = Instant::now();
-        bar.set_length(configs.len() as u64);
-        bar.set_position(0);
-        bar.set_prefix("per light: map sizes and filters");
         // One after another on one renderer: the passes are timed one by one anyway.
-        let light_rows = measure(
-            renderer,
-            scene,
-            settings,
-            &configs,
-            settings.final_frames,
-            (false, true),
-            bar,
-        )?;
-        let choices = per_light_choices(&light_rows, settings.accuracy / 100.0);
-        rungs.push(Rung {
-            stage: "per light",
-            configurations: configs.len(),
+        let stage = Stage {
+            name: "per light",
+            prefix: "per light: map sizes and filters".into(),
             frames: settings.final_frames,
-            kept: choices.len(),
-            seconds: start.elapsed().as_secs_f64(),
-        });
+            interleave: false,
+            breakdown: true,
+        };
+        let (light_rows, mut rung) =
+            measure_stage(renderer, scene, settings, &configs, stage, bar)?;
+        let choices = per_light_choices(&light_rows, settings.accuracy / 100.0);
+        rung.kept = choices.len();
+        rungs.push(rung);
         choices
     } else {
         Vec::new()
