@@ -7,7 +7,17 @@ uniform mat4 u_view_proj; // world -> light clip
 
 out vec2 v_uv;
 
+#ifdef WARP_DEPTH
+// Trapezoidal maps: the depth written is this matrix's (the light's own view), not the warp's.
+uniform mat4 u_depth_view_proj;
+out vec2 v_depth;
+#endif
+
 void main() {
     v_uv = a_uv;
-    gl_Position = u_view_proj * (u_model * vec4(a_position, 1.0));
+    vec4 world = u_model * vec4(a_position, 1.0);
+#ifdef WARP_DEPTH
+    v_depth = (u_depth_view_proj * world).zw;
+#endif
+    gl_Position = u_view_proj * world;
 }

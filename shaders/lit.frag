@@ -3,7 +3,8 @@
 //
 // Defines: SHADOW_MAP (shadow.glsl is prepended), RESULT_ALPHA (the compare result goes to alpha
 // and glAlphaFunc decides; otherwise it scales the light, INTENSITY), MASK_OUTPUT (write the
-// decision instead of light).
+// decision instead of light), HYBRID (Chan & Durand: the map decides where its compares agree,
+// the stencil elsewhere; u_hybrid_stage 0 is the marking pass of the computation mask).
 in vec3 v_world;
 in vec3 v_normal;
 in vec2 v_uv;
@@ -25,9 +26,19 @@ in vec4 v_shadows[6];
 #else
 in vec4 v_shadow;
 #endif
+#ifdef WARP_DEPTH
+#ifdef SIX_SPOTS
+in vec2 v_shadow_refs[6];
+#else
+in vec2 v_shadow_ref;
+#endif
+#endif
 uniform int u_face;           // six-spot omni light: the cube face this pass lights; -1: all
 uniform int u_sm_alpha_func;  // glAlphaFunc emulation: 0 NEVER .. 7 ALWAYS (options AlphaTestFunc)
 uniform float u_sm_alpha_ref;
+#ifdef HYBRID
+uniform int u_hybrid_stage;   // 0: marking the computation mask; 1: shading
+#endif
 
 // The face whose axis is the major axis of d; ties go to x, then y (shadow/views.rs major_face).
 int major_face(vec3 d) {
@@ -49,6 +60,29 @@ bool alpha_test(int func, float a, float ref) {
 }
 #endif
 
+#if defined(SHADOW_MAP) && !defined(SHADOW_CUBE)
+// The fragment's map coordinates (s, t, r, q); an omni light's six spots pick the face first.
+// WARP_DEPTH: r from the light's own view, where the map's depth comes from (trapezoidal).
+vec4 shadow_coords() {
+#ifdef SIX_SPOTS
+    g_face = major_face(v_world - u_light_pos);
+    vec4 stq = v_shadows[g_face];
+#ifdef WARP_DEPTH
+    vec2 rq = v_shadow_refs[g_face];
+#endif
+#else
+    vec4 stq = v_shadow;
+#ifdef WARP_DEPTH
+    vec2 rq = v_shadow_ref;
+#endif
+#endif
+#ifdef WARP_DEPTH
+    stq.z = rq.y > 0.0 ? rq.x / rq.y * stq.w : -1.0;
+#endif
+    return stq;
+}
+#endif
+
 #ifdef MASK_OUTPUT
 // Mask pass: write the decision instead of light (frame::MaskValue / 255): 1 lit, 2 shadowed.
 // u_mask_value forces it (stencil-based techniques decide by the stencil test): 0 = from
@@ -67,7 +101,23 @@ void main() {
     if (!q3_alpha_passes(u_alpha_func, albedo.a)) discard;
     // Two-sided surfaces are lit on the side the camera sees.
     vec3 n = normalize(gl_FrontFacing ? v_normal : -v_normal);
-    if (!light_reaches(v_world, n, u_light_pos, u_spot_dir, u_cos_cutoff, u_radius)) discard;
+    bool reached = light_reaches(v_world, n, u_light_pos, u_spot_dir, u_cos_cutoff, u_radius);
+#ifdef HYBRID
+    // The marking pass keeps (marks) every pixel no volume needs to count: not reached by the
+    // light, or decided by the map.
+    float decided;
+#ifdef SHADOW_CUBE
+    bool agrees = map_agrees_cube(v_world - u_light_pos, decided);
+#else
+    bool agrees = map_agrees(shadow_coords(), decided);
+#endif
+    if (u_hybrid_stage == 0) {
+        if (reached && !agrees) discard;
+        o_color = vec4(0.0);
+        return;
+    }
+#endif
+    if (!reached) discard;
     vec3 to_light = u_light_pos - v_world;
     float dist = length(to_light);
     vec3 l = to_light / dist;
@@ -81,13 +131,13 @@ void main() {
     // Fraction of the light that reaches the fragment (1 without a shadow technique).
     float visibility = 1.0;
 #ifdef SHADOW_MAP
-#ifdef SHADOW_CUBE
+#ifdef HYBRID
+    // At silhouette pixels the stencil test has decided (count zero): lit.
+    visibility = agrees ? decided : 1.0;
+#elif defined(SHADOW_CUBE)
     visibility = shadow_visibility_cube(v_world - u_light_pos);
-#elif defined(SIX_SPOTS)
-    g_face = major_face(v_world - u_light_pos);
-    visibility = shadow_visibility(v_shadows[g_face]);
 #else
-    visibility = shadow_visibility(v_shadow);
+    visibility = shadow_visibility(shadow_coords());
 #endif
 #endif
 

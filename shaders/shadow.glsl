@@ -5,7 +5,7 @@
 // compare here instead of sampler2DShadow), FILTER_HW2X2 / FILTER_PCF3 / FILTER_PCFN (default:
 // nearest),
 // OUTSIDE_RANGE (no compare outside [0,1]), REF_CLAMP (fixed-point depth: the reference is
-// clamped to [0,1] before the compare, as GL does).
+// clamped to [0,1] before the compare, as GL does), HYBRID (Chan & Durand's classification).
 
 uniform float u_map_size;
 uniform int u_pcf_size;
@@ -77,6 +77,31 @@ float compare_bilinear(vec2 uv, float ref) {
 }
 #endif
 
+#ifdef HYBRID
+// Chan & Durand's classification: the compares of the texels around the fragment's map
+// position (2r x 2r, r = u_hybrid_radius: the bilinear footprint at r = 1), each at its texel's
+// centre. True when they all agree (`decided` is then their result); false at a silhouette
+// pixel, behind the light or outside the map, where the volumes decide.
+uniform int u_hybrid_radius;
+bool map_agrees(vec4 stq, out float decided) {
+    decided = 1.0;
+    if (stq.w <= 0.0) return false;
+    vec3 p = stq.xyz / stq.w;
+    if (p.x < 0.0 || p.x > 1.0 || p.y < 0.0 || p.y > 1.0 || p.z < 0.0) return false;
+    vec2 first = floor(p.xy * u_map_size - 0.5) - float(u_hybrid_radius - 1);
+    int n = 2 * u_hybrid_radius;
+    float sum = 0.0;
+    for (int j = 0; j < n; j++) {
+        for (int i = 0; i < n; i++) {
+            vec2 uv = (first + vec2(float(i), float(j)) + 0.5) / u_map_size;
+            sum += compare_at(uv, p.z) >= 0.5 ? 1.0 : 0.0;
+        }
+    }
+    decided = sum > 0.0 ? 1.0 : 0.0;
+    return sum == 0.0 || sum == float(n * n);
+}
+#endif
+
 // Fraction of the light reaching the fragment, from texgen coordinates (s, t, r, q).
 float shadow_visibility(vec4 stq) {
     // ARB_shadow: points behind the light (q <= 0) and with negative r read as shadowed.
@@ -116,6 +141,36 @@ float cube_compare(vec3 d, float ref) {
     return texture(u_shadow_cube, vec4(d, ref));
 #endif
 }
+
+#ifdef HYBRID
+// The classification on a cube map: 2r x 2r compares one texel apart across the face around
+// direction d (the bilinear footprint at r = 1).
+uniform int u_hybrid_radius;
+bool map_agrees_cube(vec3 d, out float decided) {
+    decided = 1.0;
+    vec3 a = abs(d);
+    float major = max(a.x, max(a.y, a.z));
+    float n = u_cube_near_far.x;
+    float f = u_cube_near_far.y;
+    float ref = 0.5 * ((f + n) / (f - n) - 2.0 * f * n / ((f - n) * major)) + 0.5;
+    if (ref < 0.0) return false;
+    vec3 axis = a.x >= a.y && a.x >= a.z ? vec3(1, 0, 0) : (a.y >= a.z ? vec3(0, 1, 0) : vec3(0, 0, 1));
+    vec3 u = normalize(cross(axis, abs(axis.y) > 0.5 ? vec3(0, 0, 1) : vec3(0, 1, 0)));
+    vec3 v = cross(axis, u);
+    float step = 2.0 * major / u_map_size;
+    int k = 2 * u_hybrid_radius;
+    float lo = -0.5 * float(k - 1);
+    float sum = 0.0;
+    for (int j = 0; j < k; j++) {
+        for (int i = 0; i < k; i++) {
+            vec3 at = d + (u * (lo + float(i)) + v * (lo + float(j))) * step;
+            sum += cube_compare(at, ref) >= 0.5 ? 1.0 : 0.0;
+        }
+    }
+    decided = sum > 0.0 ? 1.0 : 0.0;
+    return sum == 0.0 || sum == float(k * k);
+}
+#endif
 
 float shadow_visibility_cube(vec3 d) {
     vec3 a = abs(d);

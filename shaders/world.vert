@@ -30,6 +30,16 @@ out vec4 v_shadows[6];
 uniform mat4 u_texgen;
 out vec4 v_shadow;
 #endif
+#ifdef WARP_DEPTH
+// Trapezoidal maps: the compared depth's (r, q) from the light's own view.
+#ifdef SIX_SPOTS
+uniform mat4 u_texgen_depths[6];
+out vec2 v_shadow_refs[6];
+#else
+uniform mat4 u_texgen_depth;
+out vec2 v_shadow_ref;
+#endif
+#endif
 #endif
 
 // Only where gl_ClipDistance exists (HAS_CLIP_DISTANCE, see gl/program.rs); elsewhere the
@@ -53,6 +63,13 @@ void main() {
     for (int f = 0; f < 6; f++) v_shadows[f] = u_texgens[f] * (u_view * world);
 #else
     v_shadow = u_texgen * (u_view * world);
+#endif
+#ifdef WARP_DEPTH
+#ifdef SIX_SPOTS
+    for (int f = 0; f < 6; f++) v_shadow_refs[f] = (u_texgen_depths[f] * (u_view * world)).zw;
+#else
+    v_shadow_ref = (u_texgen_depth * (u_view * world)).zw;
+#endif
 #endif
 #endif
 #if defined(CLIP_PLANES) && defined(HAS_CLIP_DISTANCE)

@@ -18,6 +18,8 @@ pub enum StepKind {
     Base,
     /// Count a light's shadow volumes into the stencil buffer.
     Stencil,
+    /// The hybrid's computation mask (and counts) in the stencil: where the map decides.
+    ComputationMask,
     /// A light's additive pass.
     Lit,
     /// The fill quad that darkens where the stencil is set.
@@ -75,6 +77,35 @@ pub struct Frame {
     pub cache: CacheStats,
     /// Options replaced because the GL lacks (or `gl.disable` hides) a feature they need.
     pub fallbacks: Vec<crate::plan::fallback::Fallback>,
+    /// Per hybrid light, what its classification found and what its mask saved (with masks).
+    pub hybrid: Vec<HybridStats>,
+}
+
+/// One hybrid light's classification and computation mask, measured after the frame.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct HybridStats {
+    pub light: usize,
+    /// Receiver pixels the light reaches.
+    pub receiver_pixels: u64,
+    /// Of those, the pixels where the map's compares disagree: the volumes decide there.
+    pub silhouette_pixels: u64,
+    /// Volume fragments that pass the computation mask (GL_SAMPLES_PASSED, depth test off),
+    /// and all of them, as plain shadow volumes rasterise them; None where the GL has no
+    /// such query.
+    pub volume_fragments: Option<u64>,
+    pub volume_fragments_unmasked: Option<u64>,
+}
+
+impl HybridStats {
+    /// Share of the light's receiver pixels classified as silhouette pixels.
+    pub fn silhouette_share(&self) -> f64 {
+        self.silhouette_pixels as f64 / self.receiver_pixels.max(1) as f64
+    }
+
+    /// Volume fragments past the mask as a share of all of them.
+    pub fn fragment_share(&self) -> Option<f64> {
+        Some(self.volume_fragments? as f64 / self.volume_fragments_unmasked?.max(1) as f64)
+    }
 }
 
 impl Frame {

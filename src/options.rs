@@ -356,7 +356,50 @@ option_enum! {
         /// Per light, the cheaper of the two whose estimated error meets `accuracy` (thesis
         /// chapter 7: pick the algorithm for the case); the planner says why.
         Auto = "auto",
+        /// Perspective shadow maps (Stamminger & Drettakis 2002, thesis chapter 4): each map
+        /// drawn in the camera's post-perspective space (`psm.*`); a light where that
+        /// degenerates falls back to a standard map and the stats say why.
+        Psm = "psm",
+        /// Trapezoidal shadow maps (Martin & Tan 2004, after Forsyth's slides): the light's
+        /// view of the camera frustum warped by a trapezoid onto the map (`psm.*` shared).
+        Tsm = "tsm",
+        /// Chan & Durand's hybrid (2004, thesis chapter 5): a shadow map decides where its
+        /// 2×2 compares agree; shadow volumes are counted only at the other pixels (`hybrid.*`).
+        Hybrid = "hybrid",
     }
+}
+
+impl Technique {
+    /// Whether the technique draws shadow maps (its lit pass reads them).
+    pub fn uses_maps(self) -> bool {
+        matches!(
+            self,
+            Technique::ShadowMap | Technique::Psm | Technique::Tsm | Technique::Hybrid
+        )
+    }
+
+    /// Whether the technique counts shadow volumes into the stencil.
+    pub fn uses_volumes(self) -> bool {
+        matches!(self, Technique::ShadowVolume | Technique::Hybrid)
+    }
+
+    /// The warp its maps are drawn with (`psm`, `tsm`), if any.
+    pub fn warp(self) -> Option<Warp> {
+        match self {
+            Technique::Psm => Some(Warp::Perspective),
+            Technique::Tsm => Some(Warp::Trapezoid),
+            _ => None,
+        }
+    }
+}
+
+/// How a warped shadow map reparameterises the light's view.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum Warp {
+    /// The camera's post-perspective space (`psm`).
+    Perspective,
+    /// A trapezoid around the camera frustum in the light's view (`tsm`).
+    Trapezoid,
 }
 
 option_enum! {
@@ -837,6 +880,50 @@ define_options! {
         alpha_casters: AlphaCasters = AlphaCasters::Test;
     }
 
+    /// Warped shadow maps: perspective (`technique = psm`, thesis chapter 4) and trapezoidal
+    /// (`technique = tsm`). Each view of the light (a spot's frustum, each of an omni light's
+    /// six faces) is warped on its own; the rest of `shadow_map.*` applies as to a standard map.
+    group psm: PsmOptions {
+        /// Fit the warped map to the receivers in view and the casters that can shadow them
+        /// (the thesis's cube clipping); off, to the whole view frustum within the light's
+        /// range and view.
+        fit: bool = true;
+        /// Move the virtual camera back until every caster that can shadow the view lies in
+        /// front of it (Stamminger & Drettakis: a caster behind the camera would be projected
+        /// through infinity); off, such casters are left out of the map.
+        slide_back: bool = true;
+        /// A light behind the virtual camera lands beyond the infinity plane in
+        /// post-perspective space, where the order of depths along its rays inverts: draw it
+        /// with the depth range reversed (Kozlov's inversion). Off, such a light falls back.
+        invert: bool = true;
+        /// Near plane of the virtual camera as a share of its far plane, at least: the warp's
+        /// strength (smaller is stronger: more texels near the camera, fewer far away).
+        min_near: f32 = 0.05, in 0.0001 ..= 1.0;
+        /// Widest field of view, in degrees, of the light's frustum in post-perspective space;
+        /// a light that needs a wider one (it sees the view from inside it) falls back.
+        max_fov: f32 = 150.0, in 10.0 ..= 179.0;
+        /// Forsyth's duelling frusta: the light shines toward the camera when the angle between
+        /// the view direction and the light's direction to the view exceeds this (degrees);
+        /// the warp then gives the near field nothing, and the light falls back.
+        duel_angle: f32 = 135.0, in 90.0 ..= 180.0;
+        /// Trapezoidal maps: the share of the view's depth range (from its near end) that
+        /// Martin & Tan's 80% rule maps onto the first 80% of the map's height.
+        tsm_focus: f32 = 0.5, in 0.05 ..= 0.95;
+    }
+
+    /// Chan & Durand's hybrid (`technique = hybrid`): the shadow map's compares decide where
+    /// they agree; elsewhere (the silhouette pixels) the stencil volumes decide.
+    group hybrid: HybridOptions {
+        /// Texels around the fragment's map position whose compares must agree for the map to
+        /// decide: 1 is the paper's 2×2 bilinear footprint; 2 looks at 4×4 (more silhouette
+        /// pixels, fewer map errors left).
+        radius: u32 = 1, in 1 ..= 4;
+        /// Keep the volumes' rasterisation to silhouette pixels with the stencil's top bit (the
+        /// computation mask, tested before the count); off, the volumes are counted everywhere
+        /// and only the final shading takes the map's decision elsewhere.
+        mask: bool = true;
+    }
+
     /// Stenciled shadow volumes (paper section 4, thesis chapter 3). Defaults: the paper's pipeline.
     group shadow_volume: ShadowVolumeOptions {
         /// Stencil counting: zfail (paper), zpass (no caps), or auto per caster.
@@ -1013,6 +1100,11 @@ impl Options {
     /// Every technique some light of a scene with `lights` lights uses.
     pub fn uses(&self, lights: usize, technique: Technique) -> bool {
         (0..lights).any(|i| self.light_enabled(i) && self.technique_for(i) == technique)
+    }
+
+    /// Whether some enabled light of `lights` runs a technique for which `test` holds.
+    pub fn uses_where(&self, lights: usize, test: impl Fn(Technique) -> bool) -> bool {
+        (0..lights).any(|i| self.light_enabled(i) && test(self.technique_for(i)))
     }
 
     /// Validates cross-field rules that a single `set` cannot see.

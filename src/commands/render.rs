@@ -234,6 +234,15 @@ pub fn run(common: &CommonArgs, args: &Args) -> Result<()> {
                 "plan": frame.plan_stats,
                 "cache": frame.cache,
                 "volumes": volumes,
+                "hybrid": frame.hybrid.iter().map(|h| serde_json::json!({
+                    "light": h.light,
+                    "receiver_pixels": h.receiver_pixels,
+                    "silhouette_pixels": h.silhouette_pixels,
+                    "silhouette_share": h.silhouette_share(),
+                    "volume_fragments": h.volume_fragments,
+                    "volume_fragments_unmasked": h.volume_fragments_unmasked,
+                    "fragment_share": h.fragment_share(),
+                })).collect::<Vec<_>>(),
                 "sampled": sampled.as_ref().map(|(s, ms)| serde_json::json!({
                     "samples_per_light": options.estimate.samples,
                     "trace_ms": ms,
@@ -241,6 +250,22 @@ pub fn run(common: &CommonArgs, args: &Args) -> Result<()> {
                     "per_light": s.per_light,
                 })),
             }))?
+        );
+    }
+    for h in &frame.hybrid {
+        let fragments = match (h.volume_fragments, h.volume_fragments_unmasked) {
+            (Some(m), Some(all)) => format!(
+                "; volume fragments past the computation mask {m} of {all} ({:.1}%)",
+                100.0 * h.fragment_share().unwrap_or(0.0)
+            ),
+            _ => String::new(),
+        };
+        eprintln!(
+            "light{} hybrid: {} silhouette pixels of {} receivers ({:.2}%){fragments}",
+            h.light,
+            h.silhouette_pixels,
+            h.receiver_pixels,
+            100.0 * h.silhouette_share()
         );
     }
     // Per-light passes are summed so that 64 lights still give one readable line.

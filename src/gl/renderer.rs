@@ -21,7 +21,7 @@ use super::timing::PassTimer;
 use super::upload::GpuScene;
 use super::volumes::{LightVolumes, VolumeBuffers};
 use crate::frame::CacheStats;
-use crate::frame::{Frame, Step, StepKind};
+use crate::frame::{Frame, HybridStats, Step, StepKind};
 use crate::geometry::projection::cube_face_view;
 use crate::images::{GBuffer, Mask, MaskValue, Rgba, StencilImage};
 use crate::options::{
@@ -127,8 +127,16 @@ fn lit_defines(options: &Options, v: LitVariant, texel_grid: bool) -> Vec<&'stat
         cube,
         six,
         mask,
+        hybrid,
+        warp_depth,
     } = v;
     let mut d = Vec::new();
+    if hybrid {
+        d.push("HYBRID");
+    }
+    if warp_depth {
+        d.push("WARP_DEPTH");
+    }
     if shadow_map {
         if six {
             d.push("SIX_SPOTS");
@@ -179,6 +187,24 @@ struct LitVariant {
     six: bool,
     /// Writing the decision mask instead of light.
     mask: bool,
+    /// Chan & Durand's hybrid (with `shadow_map`).
+    hybrid: bool,
+    /// The compared depth from the light's own view (trapezoidal maps).
+    warp_depth: bool,
+}
+
+impl LitVariant {
+    /// Without a shadow map: lit (or `mask`) as the stencil says.
+    fn plain(mask: bool) -> LitVariant {
+        LitVariant {
+            shadow_map: false,
+            cube: false,
+            six: false,
+            mask,
+            hybrid: false,
+            warp_depth: false,
+        }
+    }
 }
 
 /// Bestimt and Freitag's fill colour (their 0x00E0E0E0 with DESTCOLOR blending).
@@ -188,6 +214,8 @@ struct Programs {
     unlit: Program,
     gbuffer: Program,
     depth: Program,
+    /// The depth pass storing another matrix's depth than it draws with (trapezoidal maps).
+    depth_warp: Program,
     volume: Program,
     fill: Program,
     /// The depth's 4×4 block maxima for the planner.
@@ -210,6 +238,13 @@ impl Programs {
                 sources::DEPTH_VERT,
                 Some(sources::DEPTH_FRAG),
                 &[],
+            )?,
+            depth_warp: Program::new(
+                gl,
+                "depth_warp",
+                sources::DEPTH_VERT,
+                Some(sources::DEPTH_FRAG),
+                &["WARP_DEPTH"],
             )?,
             volume: Program::new(
                 gl,
@@ -273,6 +308,7 @@ impl Programs {
             &self.unlit,
             &self.gbuffer,
             &self.depth,
+            &self.depth_warp,
             &self.volume,
             &self.fill,
             &self.depth_reduce,
@@ -502,10 +538,22 @@ impl Renderer {
     fn check_support(&self, options: &Options, plan: &Plan) -> Result<(), RenderError> {
         let size = options.shadow_map.size;
         let max = self.caps.max_texture_size.max(1) as u32;
-        if plan.any(Technique::ShadowMap) && size > max {
+        if plan.any_maps() && size > max {
             return Err(RenderError::Unsupported(format!(
                 "shadow_map.size = {size} exceeds GL_MAX_TEXTURE_SIZE {max}"
             )));
+        }
+        if options.gl.pipeline == Pipeline::FixedFunction {
+            for (t, why) in [
+                (Technique::Hybrid, "classifies pixels in a shader"),
+                (Technique::Tsm, "writes the light's own depth from a shader"),
+            ] {
+                if plan.any(t) {
+                    return Err(RenderError::Unsupported(format!(
+                        "technique = {t} {why}: it needs gl.pipeline = shaders"
+                    )));
+                }
+            }
         }
         Ok(())
     }
@@ -574,7 +622,7 @@ impl Renderer {
         request: FrameRequest,
     ) -> Result<bool, RenderError> {
         let sm = &options.shadow_map;
-        let copy = plan.any(Technique::ShadowMap) && copies_from_frame(sm);
+        let copy = plan.any_maps() && copies_from_frame(sm);
         let alloc = if copy { (sm.size, sm.size) } else { (0, 0) };
         self.ensure_target(
             plan.camera.width,
@@ -599,16 +647,27 @@ impl Renderer {
         options: &Options,
         request: FrameRequest,
     ) -> Result<HashMap<LitVariant, String>, RenderError> {
-        let shadow_mapped = plan.any(Technique::ShadowMap);
+        let shadow_mapped = plan.any_maps();
+        let hybrids = plan.any(Technique::Hybrid);
+        let trapezoids = plan.any(Technique::Tsm);
         let mut variants = HashMap::new();
-        for (shadow_map, cube, six) in [
-            (false, false, false),
-            (true, false, false),
-            (true, true, false),
-            (true, false, true),
+        for (shadow_map, cube, six, hybrid, warp_depth) in [
+            (false, false, false, false, false),
+            (true, false, false, false, false),
+            (true, true, false, false, false),
+            (true, false, true, false, false),
+            (true, false, false, true, false),
+            (true, true, false, true, false),
+            (true, false, true, true, false),
+            (true, false, false, false, true),
+            (true, false, true, false, true),
         ] {
             for mask in [false, true] {
-                if (shadow_map && !shadow_mapped) || (mask && !request.masks) {
+                if (shadow_map && !shadow_mapped)
+                    || (mask && !request.masks)
+                    || (hybrid && !hybrids)
+                    || (warp_depth && !trapezoids)
+                {
                     continue;
                 }
                 let v = LitVariant {
@@ -616,6 +675,8 @@ impl Renderer {
                     cube,
                     six,
                     mask,
+                    hybrid,
+                    warp_depth,
                 };
                 let defines = lit_defines(options, v, request.overlays.texel_grid);
                 let key = self.programs.lit_variant(gl, &defines)?;
@@ -749,7 +810,7 @@ impl<'a> FrameRun<'a> {
             )));
         }
         let rgba = self.target.read_rgba(self.ctx.gl);
-        let (gbuffer, masks) = self.measure(&maps);
+        let (gbuffer, masks, hybrid) = self.measure(&maps);
         let plan = self.ctx.plan;
         Ok(Frame {
             image: Rgba {
@@ -769,16 +830,12 @@ impl<'a> FrameRun<'a> {
             plan_stats: plan.stats.clone(),
             cache: self.cache,
             fallbacks: Vec::new(),
+            hybrid,
         })
     }
 
-    fn lit_program(&self, shadow_map: bool, cube: bool, six: bool, mask: bool) -> &Program {
-        &self.programs.lit[&self.variants[&LitVariant {
-            shadow_map,
-            cube,
-            six,
-            mask,
-        }]]
+    fn lit_program(&self, v: LitVariant) -> &Program {
+        &self.programs.lit[&self.variants[&v]]
     }
 
     /// Records a step; the stopped frame when it is the one to stop after, with the image
@@ -827,6 +884,7 @@ impl<'a> FrameRun<'a> {
             plan_stats: plan.stats.clone(),
             cache: CacheStats::default(),
             fallbacks: Vec::new(),
+            hybrid: Vec::new(),
         }
     }
 
@@ -836,13 +894,13 @@ impl<'a> FrameRun<'a> {
         let (gl, plan) = (self.ctx.gl, self.ctx.plan);
         let sm = &self.ctx.options.shadow_map;
         let mut maps: Vec<ViewMap> = Vec::new();
-        let fbo = if plan.any(Technique::ShadowMap) && !self.copy {
+        let fbo = if plan.any_maps() && !self.copy {
             Some(self.shadow_maps.fbo(gl).map_err(RenderError::Gl)?)
         } else {
             None
         };
         for (pi, lp) in plan.lights.iter().enumerate() {
-            if lp.technique != Technique::ShadowMap {
+            if !lp.technique.uses_maps() {
                 continue;
             }
             for (vi, view) in lp.views.iter().enumerate() {
@@ -916,10 +974,16 @@ impl<'a> FrameRun<'a> {
             cube_face: face,
             order: lp.order,
             casters: lp.view_casters.get(vi).map(Vec::as_slice),
+            depth_view_proj: lp.views[vi].depth_view_proj,
+        };
+        let depth_program = if view.depth_view_proj.is_some() {
+            &self.programs.depth_warp
+        } else {
+            &self.programs.depth
         };
         match self.fixed {
             Some(ff) => fixed::shadow_map::render(&self.ctx, ff, &view, &target),
-            None => passes::shadow_map::render(&self.ctx, &self.programs.depth, &view, &target),
+            None => passes::shadow_map::render(&self.ctx, depth_program, &view, &target),
         }
         let copy = self.copy;
         let fbo_of_frame = self.target.fbo;
@@ -998,16 +1062,12 @@ impl<'a> FrameRun<'a> {
     /// Each shadow-volume light's draws from the planner, uploaded.
     fn volume_draws(&mut self) -> Result<(), RenderError> {
         let (gl, plan) = (self.ctx.gl, self.ctx.plan);
-        if !plan.any(Technique::ShadowVolume) {
+        if !plan.any_volumes() {
             return Ok(());
         }
         let prepare_start = Instant::now();
         let mut builds_ms = 0.0;
-        for lp in plan
-            .lights
-            .iter()
-            .filter(|l| l.technique == Technique::ShadowVolume)
-        {
+        for lp in plan.lights.iter().filter(|l| l.technique.uses_volumes()) {
             let v = self
                 .planner
                 .volume_draws(self.ctx.scene, plan, lp, self.ctx.options)?;
@@ -1037,7 +1097,7 @@ impl<'a> FrameRun<'a> {
 
     /// The light's volume draws with their buffers, when it has volumes this frame.
     fn volumes_of(&self, lp: &LightPlan) -> Option<LightVolumes<'_>> {
-        if lp.technique != Technique::ShadowVolume {
+        if !lp.technique.uses_volumes() {
             return None;
         }
         let draws = self.planner.last_volume_draws(lp.light)?;
@@ -1081,7 +1141,9 @@ impl<'a> FrameRun<'a> {
         let mut stencil_image = None;
         for (pi, lp) in plan.lights.iter().enumerate() {
             set_scissor(self.ctx.gl, lp.scissor);
-            if self.volumes_of(lp).is_some() {
+            if lp.technique == Technique::Hybrid {
+                go_on!(self.hybrid_light(pi, maps));
+            } else if self.volumes_of(lp).is_some() {
                 if let Some(image) = go_on!(self.volume_light(lp)) {
                     stencil_image = Some(image);
                 }
@@ -1098,14 +1160,64 @@ impl<'a> FrameRun<'a> {
                         &self.ctx,
                         lp,
                         &bindings,
-                        |sm, cube, six| self.lit_program(sm, cube, six, false),
-                        false,
+                        |v| self.lit_program(v),
+                        (MapPass::Lit, false),
                     ),
                 }
                 go_on!(self.step(StepKind::Lit, Some(lp), None, Self::color_image));
             }
         }
         Ok(ControlFlow::Continue(stencil_image))
+    }
+
+    /// A hybrid light (Chan & Durand): its computation mask marked from its maps, its volumes
+    /// counted where the mask lets them, then one lit pass where the map decides or the count
+    /// is zero (`passes::hybrid`).
+    fn hybrid_light(&mut self, pi: usize, maps: &[ViewMap]) -> Flow<()> {
+        let gl = self.ctx.gl;
+        let lp = &self.ctx.plan.lights[pi];
+        let masked = self.ctx.options.hybrid.mask;
+        let bindings = self.bindings(maps, pi);
+        let mark = |run: &Self, overwrite: bool| {
+            draw_maps(
+                &run.ctx,
+                lp,
+                &bindings,
+                |v| run.lit_program(v),
+                (MapPass::Mark { overwrite }, true),
+            )
+        };
+        self.timer
+            .begin(gl, PassId::light(lp.light, Stage::Classify));
+        if masked {
+            passes::hybrid::clear(gl);
+            mark(self, false);
+        }
+        self.timer
+            .begin(gl, PassId::light(lp.light, Stage::Stencil));
+        if let Some(v) = self.volumes_of(lp) {
+            passes::stencil::draw(&self.ctx, &self.programs.volume, &v, lp.scissor, masked);
+        }
+        if !masked {
+            self.timer
+                .begin(gl, PassId::light(lp.light, Stage::Classify));
+            mark(self, true);
+        }
+        let (w, h) = (self.target.width, self.target.height);
+        let fbo = self.target.fbo;
+        go_on!(self.step(StepKind::ComputationMask, Some(lp), None, |_| {
+            debug::stencil_image(&debug::read_stencil(gl, fbo, w, h), w, h, true)
+        }));
+        self.timer.begin(gl, PassId::light(lp.light, Stage::Lit));
+        draw_maps(
+            &self.ctx,
+            lp,
+            &bindings,
+            |v| self.lit_program(v),
+            (MapPass::Lit, true),
+        );
+        go_on!(self.step(StepKind::Lit, Some(lp), None, Self::color_image));
+        Ok(ControlFlow::Continue(()))
     }
 
     /// A shadow-volume light: its volumes into the stencil, its lit pass where the count is
@@ -1120,7 +1232,9 @@ impl<'a> FrameRun<'a> {
         if let Some(v) = self.volumes_of(lp) {
             match self.fixed {
                 Some(ff) => fixed::stencil::draw(&self.ctx, ff, &v, lp.scissor),
-                None => passes::stencil::draw(&self.ctx, &self.programs.volume, &v, lp.scissor),
+                None => {
+                    passes::stencil::draw(&self.ctx, &self.programs.volume, &v, lp.scissor, false)
+                }
             }
         }
         let wraps = o.shadow_volume.wrap == StencilWrap::Wrap
@@ -1148,7 +1262,7 @@ impl<'a> FrameRun<'a> {
             Some(ff) => fixed::lit::draw(&self.ctx, ff, lp, &shadow, &lp.receivers),
             None => passes::lit::draw(
                 &self.ctx,
-                self.lit_program(false, false, false, false),
+                self.lit_program(LitVariant::plain(false)),
                 lp,
                 &shadow,
                 &lp.receivers,
@@ -1194,12 +1308,13 @@ impl<'a> FrameRun<'a> {
 
     /// The G-buffer and each light's decision mask, when the request asks for masks
     /// (untimed, after the frame).
-    fn measure(&self, maps: &[ViewMap]) -> (Option<GBuffer>, Vec<Mask>) {
+    fn measure(&self, maps: &[ViewMap]) -> (Option<GBuffer>, Vec<Mask>, Vec<HybridStats>) {
         let gl = self.ctx.gl;
         let plan = self.ctx.plan;
         let Some((gtarget, mtarget)) = self.measure_targets.filter(|_| self.request.masks) else {
-            return (None, Vec::new());
+            return (None, Vec::new(), Vec::new());
         };
+        let mut hybrid_stats = Vec::new();
         gtarget_bind(gl, gtarget);
         passes::gbuffer::draw(&self.ctx, &self.programs.gbuffer);
         let gbuffer = read_gbuffer(gl, gtarget);
@@ -1228,11 +1343,24 @@ impl<'a> FrameRun<'a> {
                 continue;
             }
             match self.volumes_of(lp) {
+                Some(v) if lp.technique == Technique::Hybrid => {
+                    let (stencil, fragments) = self.hybrid_mask(pi, maps, &v);
+                    set_scissor(gl, None);
+                    let values = mtarget.read(gl);
+                    hybrid_stats.push(hybrid_stats_of(lp.light, &values, &stencil, fragments));
+                    masks.push(Mask {
+                        light: lp.light,
+                        width: mtarget.width,
+                        height: mtarget.height,
+                        values,
+                    });
+                    continue;
+                }
                 Some(v) => {
-                    passes::stencil::draw(&self.ctx, &self.programs.volume, &v, lp.scissor);
+                    passes::stencil::draw(&self.ctx, &self.programs.volume, &v, lp.scissor, false);
                     passes::lit::draw_mask(
                         &self.ctx,
-                        self.lit_program(false, false, false, true),
+                        self.lit_program(LitVariant::plain(true)),
                         lp,
                         &LitShadow::Stencil { test: true },
                         &lp.receivers,
@@ -1242,8 +1370,8 @@ impl<'a> FrameRun<'a> {
                     &self.ctx,
                     lp,
                     &self.bindings(maps, pi),
-                    |sm, cube, six| self.lit_program(sm, cube, six, true),
-                    true,
+                    |v| self.lit_program(v),
+                    (MapPass::Mask, false),
                 ),
             }
             set_scissor(gl, None);
@@ -1264,7 +1392,55 @@ impl<'a> FrameRun<'a> {
             });
         }
         masks.sort_by_key(|m| m.light);
-        (Some(gbuffer), masks)
+        (Some(gbuffer), masks, hybrid_stats)
+    }
+
+    /// A hybrid light's mask, drawn as its frame drew it (mask, counts, the decision), with
+    /// its volume fragments counted with and without the mask on the way. Returns the
+    /// stencil (its top bit: where the map decides) and the two fragment counts.
+    fn hybrid_mask(
+        &self,
+        pi: usize,
+        maps: &[ViewMap],
+        v: &LightVolumes<'_>,
+    ) -> (Vec<u8>, (Option<u64>, Option<u64>)) {
+        let gl = self.ctx.gl;
+        let lp = &self.ctx.plan.lights[pi];
+        let masked = self.ctx.options.hybrid.mask;
+        let bindings = self.bindings(maps, pi);
+        let pass = |kind| {
+            draw_maps(
+                &self.ctx,
+                lp,
+                &bindings,
+                |variant| self.lit_program(variant),
+                (kind, true),
+            )
+        };
+        let volume = &self.programs.volume;
+        let fragments;
+        if masked {
+            passes::hybrid::clear(gl);
+            pass(MapPass::Mark { overwrite: false });
+            fragments = (
+                passes::hybrid::volume_fragments(&self.ctx, volume, v, true),
+                passes::hybrid::volume_fragments(&self.ctx, volume, v, false),
+            );
+            passes::stencil::draw(&self.ctx, volume, v, lp.scissor, true);
+        } else {
+            passes::stencil::draw(&self.ctx, volume, v, lp.scissor, false);
+            let all = passes::hybrid::volume_fragments(&self.ctx, volume, v, false);
+            fragments = (all, all);
+            pass(MapPass::Mark { overwrite: true });
+        }
+        pass(MapPass::Mask);
+        let (mtarget, w, h) = match self.measure_targets {
+            Some((_, m)) => (m, m.width, m.height),
+            None => unreachable!("hybrid masks are drawn into the measure targets"),
+        };
+        let stencil = debug::read_stencil(gl, mtarget.fbo, w, h);
+        mtarget.bind(gl);
+        (stencil, fragments)
     }
 }
 
@@ -1329,42 +1505,92 @@ fn fixed_maps(
     set_scissor(ctx.gl, lp.scissor);
 }
 
-/// One light's lit (or mask) passes: one per shadow map view, or one without shadows.
+/// What a light's map passes write.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum MapPass {
+    /// Light, added to the frame.
+    Lit,
+    /// The decision, into the mask target.
+    Mask,
+    /// The hybrid's computation mask, into the stencil (`overwrite`: over counts).
+    Mark { overwrite: bool },
+}
+
+/// One light's lit (or mask, or marking) passes: one per shadow map view, one for an omni
+/// light's six merged spots, or one without shadows; `hybrid` wraps the maps in
+/// `LitShadow::Hybrid`.
 fn draw_maps<'p>(
     ctx: &PassContext,
     lp: &LightPlan,
     bindings: &[(bool, ShadowBinding, &[u32], Option<Scissor>)],
-    program: impl Fn(bool, bool, bool) -> &'p Program,
-    mask: bool,
+    program: impl Fn(LitVariant) -> &'p Program,
+    (kind, hybrid): (MapPass, bool),
 ) {
-    let pass = |p: &Program, s: &LitShadow, receivers: &[u32]| {
-        if mask {
-            passes::lit::draw_mask(ctx, p, lp, s, receivers);
+    let pass = |six: bool, cube: bool, s: &LitShadow, receivers: &[u32]| {
+        let shadow_map = !matches!(s, LitShadow::None);
+        let v = LitVariant {
+            shadow_map,
+            cube,
+            six,
+            mask: kind == MapPass::Mask,
+            hybrid,
+            warp_depth: shadow_map && lp.technique == Technique::Tsm,
+        };
+        let p = program(v);
+        let wrapped;
+        let s = if hybrid {
+            wrapped = LitShadow::Hybrid(s);
+            &wrapped
         } else {
-            passes::lit::draw(ctx, p, lp, s, receivers);
+            s
+        };
+        match kind {
+            MapPass::Lit => passes::lit::draw(ctx, p, lp, s, receivers),
+            MapPass::Mask => passes::lit::draw_mask(ctx, p, lp, s, receivers),
+            MapPass::Mark { overwrite } => {
+                passes::hybrid::mark(ctx, p, lp, s, receivers, overwrite)
+            }
         }
     };
     if bindings.is_empty() {
-        pass(
-            program(false, false, false),
-            &LitShadow::None,
-            &lp.receivers,
-        );
+        pass(false, false, &LitShadow::None, &lp.receivers);
     }
     if lp.merged && bindings.len() == 6 {
         let maps: Vec<&ShadowBinding> = bindings.iter().map(|(_, b, _, _)| b).collect();
-        pass(
-            program(true, false, true),
-            &LitShadow::Faces(&maps),
-            &lp.receivers,
-        );
+        pass(true, false, &LitShadow::Faces(&maps), &lp.receivers);
         return;
     }
     for (cube, b, receivers, rect) in bindings {
         set_scissor(ctx.gl, *rect);
-        pass(program(true, *cube, false), &LitShadow::Map(b), receivers);
+        pass(false, *cube, &LitShadow::Map(b), receivers);
     }
     set_scissor(ctx.gl, lp.scissor);
+}
+
+/// A hybrid light's stats from its mask values and its stencil after the frame's passes.
+fn hybrid_stats_of(
+    light: usize,
+    values: &[u8],
+    stencil: &[u8],
+    (volume_fragments, volume_fragments_unmasked): (Option<u64>, Option<u64>),
+) -> HybridStats {
+    let receiver = |v: u8| v == MaskValue::Lit as u8 || v == MaskValue::Shadowed as u8;
+    let mut stats = HybridStats {
+        light,
+        receiver_pixels: 0,
+        silhouette_pixels: 0,
+        volume_fragments,
+        volume_fragments_unmasked,
+    };
+    for (&v, &s) in values.iter().zip(stencil) {
+        if receiver(v) {
+            stats.receiver_pixels += 1;
+            if s as u32 & passes::lit::MAP_DECIDES == 0 {
+                stats.silhouette_pixels += 1;
+            }
+        }
+    }
+    stats
 }
 
 fn gtarget_bind(gl: &glow::Context, t: &GBufferTarget) {

@@ -76,12 +76,28 @@ pub fn explain(step: &Step, options: &Options, executed: Executed) -> Explanatio
             what: format!(
                 "The casters are drawn from the light into a {0}x{0} depth buffer: the shadow map \
                  stores, per texel, the depth of the nearest {1} the light sees. Brighter is \
-                 nearer.",
+                 nearer.{2}",
                 sm.size,
                 match sm.cull {
                     CasterFaces::Front => "front face",
                     CasterFaces::Back => "back face",
                     CasterFaces::Both => "face of either side",
+                },
+                match step.technique {
+                    Some(crate::options::Technique::Psm) => {
+                        " Perspective shadow map: the scene is first taken into the camera's \
+                         post-perspective space (the camera slid back behind the casters), where \
+                         near things are large, and the light's frustum there is fitted to the \
+                         receivers in view: the near field gets most of the texels. A view where \
+                         that degenerates keeps its standard map (render --stats lists them)."
+                    }
+                    Some(crate::options::Technique::Tsm) => {
+                        " Trapezoidal shadow map: the light's view of the camera frustum is \
+                         bounded by a trapezoid whose short edge lies at the camera, and the \
+                         trapezoid is stretched onto the square map (Martin & Tan's 80% rule \
+                         places its apex): the near field gets most of the texels."
+                    }
+                    _ => "",
                 }
             ),
             gl_state: format!(
@@ -177,6 +193,17 @@ pub fn explain(step: &Step, options: &Options, executed: Executed) -> Explanatio
                         "every fragment is lit; the fill quad darkens the shadowed ones next"
                     }
                 },
+                crate::options::Technique::Psm | crate::options::Technique::Tsm => {
+                    "each fragment is projected into the light's warped map (the same matrix \
+                     drew it: the camera's post-perspective space for psm, the trapezoid for \
+                     tsm) and compared there"
+                }
+                crate::options::Technique::Hybrid => {
+                    "where the 2×2 compares around the fragment's map position agree the map \
+                     decides; at the other (silhouette) pixels the stencil count does, so the \
+                     stencil test keeps count zero and non-silhouette pixels alike and the \
+                     shader drops the fragments the map shadows"
+                }
                 crate::options::Technique::None | crate::options::Technique::Auto => {
                     "no shadow test"
                 }
@@ -191,6 +218,28 @@ pub fn explain(step: &Step, options: &Options, executed: Executed) -> Explanatio
                     .into(),
             }
         }
+        StepKind::ComputationMask => Explanation {
+            title: format!("Computation mask and counts ({who})"),
+            what: format!(
+                "Chan & Durand's hybrid: the light's receivers are drawn over the unlit depth and \
+                 each fragment compares its depth with the {0}x{0} texels of the map around its \
+                 position. Where they all agree the map decides and the stencil's top bit is set \
+                 (bright here); where they disagree — a silhouette pixel — the volumes are \
+                 counted in the low seven bits, and only there.",
+                2 * options.hybrid.radius
+            ),
+            gl_state: if options.hybrid.mask {
+                "glClear(GL_STENCIL_BUFFER_BIT); marking: glStencilFunc(GL_ALWAYS, 0x80, ~0), \
+                 glStencilOp(KEEP, KEEP, REPLACE), glStencilMask(0x80), colour writes off; \
+                 volumes: glStencilFunc(GL_EQUAL, 0, 0x80), glStencilMask(0x7f), counted as \
+                 shadow volumes are."
+                    .into()
+            } else {
+                "hybrid.mask off: the volumes are counted everywhere first, then the marking \
+                 pass overwrites the stencil with 0x80 where the map decides."
+                    .into()
+            },
+        },
         StepKind::Fill => Explanation {
             title: format!("Fill quad ({who})"),
             what: "Bestimt and Freitag's shading: a full-screen quad darkens every pixel whose \

@@ -65,7 +65,13 @@ fn technique_options(technique: Technique, options: &Options) -> String {
     match technique {
         Technique::ShadowMap => serde_json::to_string(&options.shadow_map),
         Technique::ShadowVolume => serde_json::to_string(&options.shadow_volume),
-        _ => Ok(String::new()),
+        Technique::Psm | Technique::Tsm => {
+            serde_json::to_string(&(&options.shadow_map, &options.psm))
+        }
+        Technique::Hybrid => {
+            serde_json::to_string(&(&options.shadow_map, &options.shadow_volume, &options.hybrid))
+        }
+        Technique::None | Technique::Auto => Ok(String::new()),
     }
     .unwrap_or_default()
 }
@@ -166,14 +172,14 @@ impl AutoMemory {
 /// The expected error, as a fraction of receiver pixels, of `technique` for a light.
 pub fn estimated_error(technique: Technique, options: &Options, alpha_casters: bool) -> f64 {
     match technique {
-        Technique::ShadowVolume => {
+        Technique::ShadowVolume | Technique::Hybrid => {
             if alpha_casters {
                 0.01
             } else {
                 0.0005
             }
         }
-        Technique::ShadowMap => {
+        Technique::ShadowMap | Technique::Psm | Technique::Tsm => {
             let o = &options.shadow_map;
             let size = (512.0 / o.size.max(1) as f64).powf(0.75);
             let depth = if o.depth_bits == DepthBits::D16 {

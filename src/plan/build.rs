@@ -7,11 +7,12 @@ use super::{CameraSetup, LightPlan, PartTriangles, Plan, PlanStats, VolumePart, 
 use crate::geometry::{Aabb, Frustum};
 use crate::options::{
     CountingMode, OmniMode, Options, Outside, ShadowMapOptions, ShadowVolumeOptions, StencilPasses,
-    Technique, VolumeCasters, VolumeProjection,
+    Technique, VolumeCasters, VolumeProjection, Warp,
 };
 use crate::scene::{Camera, Light, LightKind, Scene, SurfaceOwner};
 use crate::shadow::views::{ViewKind, shadow_views};
 use crate::shadow::volume::{self, CasterGroup, CasterGroups, Counting, PieceRef};
+use crate::shadow::warp::{self, WarpInput};
 use glam::{Mat4, Vec3};
 
 /// A hash of anything hashable.
@@ -36,6 +37,8 @@ struct FrameFacts<'a> {
     options: &'a Options,
     memory: &'a AutoMemory,
     camera: CameraSetup,
+    /// The scene's camera (warped maps fit to it).
+    scene_camera: Camera,
     /// The camera frustum without a far plane: volumes reach infinity.
     view_frustum: Frustum,
     near: f32,
@@ -236,8 +239,7 @@ impl<'a> FrameFacts<'a> {
         groups: Option<&'a CasterGroups>,
     ) -> FrameFacts<'a> {
         let n = scene.lights.len();
-        let maps_possible =
-            options.uses(n, Technique::ShadowMap) || options.uses(n, Technique::Auto);
+        let maps_possible = options.uses_where(n, |t| t.uses_maps() || t == Technique::Auto);
         let caster_list: Vec<u32> = (0..casters.len())
             .filter(|&i| casters[i])
             .map(|i| i as u32)
@@ -290,6 +292,7 @@ impl<'a> FrameFacts<'a> {
             near: camera.near,
             near_quad: near_quad_of(&setup, options),
             camera: setup,
+            scene_camera: *camera,
             leaves,
             receivers_in_view,
             caster_list,
@@ -349,9 +352,15 @@ impl<'a> FrameFacts<'a> {
             reason,
         };
         let left_without = match technique {
-            Technique::ShadowMap => self.plan_maps(&mut plan, stats),
+            Technique::ShadowMap | Technique::Psm | Technique::Tsm => {
+                self.plan_maps(&mut plan, stats)
+            }
             Technique::ShadowVolume => self.plan_volumes(&mut plan, stats),
-            _ => None,
+            // The hybrid needs both: its map classifies, its volumes decide at silhouettes.
+            Technique::Hybrid => self
+                .plan_maps(&mut plan, stats)
+                .or_else(|| self.plan_volumes(&mut plan, stats)),
+            Technique::None | Technique::Auto => None,
         };
         if let Some(why) = left_without {
             plan.technique = Technique::None;
@@ -361,7 +370,7 @@ impl<'a> FrameFacts<'a> {
             stats.lights_without_casters += 1;
         }
         stats.receivers_drawn += match plan.technique {
-            Technique::ShadowMap if !plan.merged => plan.view_receivers.iter().map(Vec::len).sum(),
+            t if t.uses_maps() && !plan.merged => plan.view_receivers.iter().map(Vec::len).sum(),
             _ => plan.receivers.len(),
         };
         Some(plan)
@@ -459,7 +468,18 @@ impl FrameFacts<'_> {
         } else {
             l
         };
-        plan.views = shadow_views(view_light, &self.caster_bounds, &self.map_options);
+        // Warped maps are 2D: six spots, never a cube.
+        let six_spots;
+        let map_options = if plan.technique.warp().is_some() {
+            six_spots = ShadowMapOptions {
+                omni: OmniMode::SixSpots,
+                ..self.options.shadow_map.clone()
+            };
+            &six_spots
+        } else {
+            &self.map_options
+        };
+        plan.views = shadow_views(view_light, &self.caster_bounds, map_options);
         let light_key = hash_of((
             &self.map_options_text,
             plan.order,
@@ -469,9 +489,7 @@ impl FrameFacts<'_> {
         ));
         for vi in 0..plan.views.len() {
             let view = &plan.views[vi];
-            let drawn = self.map_casters(l, view.kind, &view.view_proj());
-            stats.casters_drawn += drawn.len();
-            stats.casters_culled += self.caster_list.len() - drawn.len();
+            let mut drawn = self.map_casters(l, view.kind, &view.view_proj());
             let lit: Vec<u32> = match view.kind {
                 ViewKind::Face(f) if on && p.cull_receivers => {
                     let pyramid = cull::face_pyramid(l.position, f);
@@ -485,6 +503,12 @@ impl FrameFacts<'_> {
                 }
                 _ => plan.receivers.clone(),
             };
+            if let Some(kind) = plan.technique.warp() {
+                self.warp_view(plan, vi, kind, (&lit, &mut drawn), stats);
+            }
+            let view = &plan.views[vi];
+            stats.casters_drawn += drawn.len();
+            stats.casters_culled += self.caster_list.len() - drawn.len();
             let key = (on && p.cache_maps).then(|| self.map_key(light_key, view, &drawn));
             let rect = self.face_rect(l, view.kind, plan.scissor);
             plan.view_receivers.push(lit);
@@ -509,6 +533,65 @@ impl FrameFacts<'_> {
             return Some("no caster in range");
         }
         None
+    }
+
+    /// Replaces view `vi` of a `psm` or `tsm` light by its warp (`shadow::warp`), fitted to the
+    /// receivers it lights (`lit`); keeps only the casters the warp can draw (`drawn`). Where
+    /// the warp degenerates the standard view stays, and the stats say why.
+    fn warp_view(
+        &self,
+        plan: &mut LightPlan,
+        vi: usize,
+        kind: Warp,
+        (lit, drawn): (&[u32], &mut Vec<u32>),
+        stats: &mut PlanStats,
+    ) {
+        let l = &self.scene.lights[plan.light];
+        let bounds = |list: &[u32]| -> Vec<Aabb> {
+            list.iter()
+                .map(|&s| self.scene.surfaces[s as usize].bounds)
+                .collect()
+        };
+        let (receivers, casters) = (bounds(lit), bounds(drawn));
+        let view = &mut plan.views[vi];
+        let input = WarpInput {
+            camera: &self.scene_camera,
+            aspect: self.camera.width as f32 / self.camera.height.max(1) as f32,
+            light: l.position,
+            standard: view.view_proj(),
+            receivers: &receivers,
+            casters: &casters,
+            reach: Aabb {
+                min: l.position - l.radius,
+                max: l.position + l.radius,
+            },
+        };
+        let name = plan.technique;
+        let which = format!("light {} view {vi}", plan.light);
+        match warp::warp(kind, &input, &self.options.psm) {
+            Ok(w) => {
+                view.view = w.view;
+                view.projection = w.projection;
+                view.depth_view_proj = w.depth;
+                let mut keep = w.casters.iter();
+                drawn.retain(|_| *keep.next().expect("one flag per caster"));
+                let mut how = format!("{which}: {name}");
+                if w.slide > 0.0 {
+                    how += &format!(", camera slid back {:.1}", w.slide);
+                }
+                if w.inverted {
+                    how += ", light behind the camera (depth reversed)";
+                }
+                stats.warps.push(how);
+            }
+            Err(d) => {
+                stats.warp_fallbacks += 1;
+                stats.warps.push(format!(
+                    "{which}: {name} fell back to a standard map: {}",
+                    d.describe()
+                ));
+            }
+        }
     }
 
     /// The casters one view of light `l` draws: those in its range and view frustum.

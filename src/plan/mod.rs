@@ -192,6 +192,11 @@ pub struct PlanStats {
     pub stencil_passes: usize,
     /// Per light `auto` decided for: "light i: technique (why)".
     pub choices: Vec<String>,
+    /// Per warped view (`psm`, `tsm`): "light i view k: how it was warped", or why it fell
+    /// back to a standard map.
+    pub warps: Vec<String>,
+    /// Views of warped lights that fell back to a standard map.
+    pub warp_fallbacks: usize,
 }
 
 /// Everything the passes need to know for one frame.
@@ -217,6 +222,16 @@ impl Plan {
         self.lights.iter().any(|l| l.technique == technique)
     }
 
+    /// Whether some planned light draws shadow maps.
+    pub fn any_maps(&self) -> bool {
+        self.lights.iter().any(|l| l.technique.uses_maps())
+    }
+
+    /// Whether some planned light counts shadow volumes.
+    pub fn any_volumes(&self) -> bool {
+        self.lights.iter().any(|l| l.technique.uses_volumes())
+    }
+
     /// The plan for the scene's own camera.
     pub fn build(scene: &Scene, options: &Options) -> Plan {
         Plan::build_at(scene, &scene.camera, options)
@@ -238,8 +253,9 @@ impl Plan {
     /// Whether planning a frame of `scene` under `options` needs its caster groups: some
     /// light may use shadow volumes.
     pub fn needs_casters(scene: &Scene, options: &Options) -> bool {
-        let n = scene.lights.len();
-        options.uses(n, Technique::ShadowVolume) || options.uses(n, Technique::Auto)
+        options.uses_where(scene.lights.len(), |t| {
+            t.uses_volumes() || t == Technique::Auto
+        })
     }
 }
 

@@ -21,6 +21,8 @@ pub enum Stage {
     VolumePieces,
     /// A light's volumes counted into the stencil buffer.
     Stencil,
+    /// The hybrid's classification: its computation mask marked into the stencil.
+    Classify,
     /// A light's additive pass.
     Lit,
     /// The fill quad that darkens where the stencil is set.
@@ -38,12 +40,13 @@ impl Stage {
             Stage::VolumeBuild => "volume_build",
             Stage::VolumePieces => "volume_pieces",
             Stage::Stencil => "stencil",
+            Stage::Classify => "classify",
             Stage::Lit => "lit",
             Stage::Fill => "fill",
         }
     }
 
-    const ALL: [Stage; 9] = [
+    const ALL: [Stage; 10] = [
         Stage::ShadowMap,
         Stage::DepthCopy,
         Stage::Base,
@@ -51,6 +54,7 @@ impl Stage {
         Stage::VolumeBuild,
         Stage::VolumePieces,
         Stage::Stencil,
+        Stage::Classify,
         Stage::Lit,
         Stage::Fill,
     ];

@@ -120,10 +120,7 @@ impl Planner {
         options: &Options,
         float_depth: bool,
     ) -> DepthNeed {
-        let any_volumes = plan
-            .lights
-            .iter()
-            .any(|l| l.technique == Technique::ShadowVolume);
+        let any_volumes = plan.lights.iter().any(|l| l.technique.uses_volumes());
         let reads_depth = options.plan.occlusion || options.plan.depth_clip;
         self.depth.usable = false;
         self.depth.pending = None;

@@ -3,3 +3,4 @@
 pub mod edges;
 pub mod views;
 pub mod volume;
+pub mod warp;

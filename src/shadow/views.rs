@@ -35,6 +35,11 @@ pub struct ShadowView {
     pub projection: Mat4,
     pub near: f32,
     pub far: f32,
+    /// The world → clip matrix whose depth the map stores and the lit pass compares, when it
+    /// is not `view_proj` (trapezoidal maps: Martin & Tan keep the light's own depth, since the
+    /// trapezoid's projective map would scale each ray's depth by its own factor and make
+    /// the map's depth slope, and so the slope-scaled offset, huge).
+    pub depth_view_proj: Option<Mat4>,
 }
 
 impl ShadowView {
@@ -46,6 +51,17 @@ impl ShadowView {
     /// eye coordinates to shadow-map coordinates (s, t, r, q).
     pub fn texgen(&self, camera_view: &Mat4) -> Mat4 {
         bias_matrix() * self.projection * self.view * camera_view.inverse()
+    }
+
+    /// The world → clip matrix whose depth the map holds.
+    pub fn depth_matrix(&self) -> Mat4 {
+        self.depth_view_proj.unwrap_or_else(|| self.view_proj())
+    }
+
+    /// The texgen of the compared depth (its r and q): [`Self::texgen`] unless the map's depth
+    /// comes from another matrix.
+    pub fn depth_texgen(&self, camera_view: &Mat4) -> Mat4 {
+        bias_matrix() * self.depth_matrix() * camera_view.inverse()
     }
 
     /// World-space planes `(n, d)` (n·p + d ≥ 0 inside) of the frustum's four sides and its near
@@ -126,6 +142,7 @@ pub fn shadow_views(
                 projection: perspective(fov, 1.0, near, far),
                 near,
                 far,
+                depth_view_proj: None,
             }]
         }
         LightKind::Omni => {
@@ -140,6 +157,7 @@ pub fn shadow_views(
                         projection: perspective(fov, 1.0, near, far),
                         near,
                         far,
+                        depth_view_proj: None,
                     }
                 })
                 .collect();
@@ -155,6 +173,7 @@ pub fn shadow_views(
                         projection: perspective(std::f32::consts::FRAC_PI_2, 1.0, near, far),
                         near,
                         far,
+                        depth_view_proj: None,
                     }]
                 }
             }

@@ -17,12 +17,15 @@ use std::sync::Arc;
 /// Frame times kept for the graph.
 pub const HISTORY: usize = 240;
 
-/// The technique keys' cycle: none, shadow map, shadow volume, auto.
+/// The technique keys' cycle: none, the three maps, volumes, the hybrid, auto.
 fn next_technique(t: Technique) -> Technique {
     match t {
         Technique::None => Technique::ShadowMap,
-        Technique::ShadowMap => Technique::ShadowVolume,
-        Technique::ShadowVolume => Technique::Auto,
+        Technique::ShadowMap => Technique::Psm,
+        Technique::Psm => Technique::Tsm,
+        Technique::Tsm => Technique::ShadowVolume,
+        Technique::ShadowVolume => Technique::Hybrid,
+        Technique::Hybrid => Technique::Auto,
         Technique::Auto => Technique::None,
     }
 }

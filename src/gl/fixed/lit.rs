@@ -366,7 +366,7 @@ pub fn draw_mask(
     match shadow {
         LitShadow::Stencil { .. } => {
             for (func, decision) in [(glow::EQUAL, 1), (glow::NOTEQUAL, 2)] {
-                stencil_gate(gl, func);
+                stencil_gate(gl, func, 0xff);
                 value(decision);
                 draw_receivers(ctx, ff, receivers, offset);
             }

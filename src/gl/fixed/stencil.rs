@@ -44,7 +44,7 @@ pub fn draw(
 ) {
     let gl = ctx.gl;
     let o = &ctx.options.shadow_volume;
-    stencil::begin(gl, o);
+    stencil::begin(gl, o, true);
     // SAFETY: fixed-function state of the current compatibility context.
     unsafe {
         gl.use_program(None);

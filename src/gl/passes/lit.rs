@@ -29,11 +29,31 @@ pub enum LitShadow<'a> {
     Stencil {
         test: bool,
     },
+    /// Chan & Durand's hybrid: the maps (`Map` or `Faces`) decide where their compares
+    /// agree, the stencil counts at the other pixels (the low seven bits; the top bit marks
+    /// the pixels the map decides, see `passes::hybrid`).
+    Hybrid(&'a LitShadow<'a>),
 }
 
+/// The stencil bit of the hybrid's computation mask: set where the map decides.
+pub const MAP_DECIDES: u32 = 0x80;
+/// The stencil bits that count volumes under the hybrid.
+pub const COUNT_BITS: u32 = 0x7f;
+
 /// Binds `program` with the light's uniforms and, with a shadow map, the texgen, the map and
-/// the fixed-function state of the technique.
-fn bind_light(ctx: &PassContext, program: &Program, lp: &LightPlan, shadow: &LitShadow) {
+/// the fixed-function state of the technique; the hybrid's program shades (stage 1).
+pub fn bind_light(ctx: &PassContext, program: &Program, lp: &LightPlan, shadow: &LitShadow) {
+    match shadow {
+        LitShadow::Hybrid(maps) => {
+            bind_maps(ctx, program, lp, maps);
+            program.set_i32(ctx.gl, "u_hybrid_stage", 1);
+            program.set_i32(ctx.gl, "u_hybrid_radius", ctx.options.hybrid.radius as i32);
+        }
+        _ => bind_maps(ctx, program, lp, shadow),
+    }
+}
+
+fn bind_maps(ctx: &PassContext, program: &Program, lp: &LightPlan, shadow: &LitShadow) {
     let gl = ctx.gl;
     let light = &ctx.scene.lights[lp.light];
     program.bind(gl);
@@ -92,6 +112,11 @@ fn bind_light(ctx: &PassContext, program: &Program, lp: &LightPlan, shadow: &Lit
         program.set_i32(gl, "u_face", -1);
         for (i, m) in maps.iter().enumerate() {
             program.set_mat4(gl, &format!("u_texgens[{i}]"), &m.view.texgen(&camera_view));
+            program.set_mat4(
+                gl,
+                &format!("u_texgen_depths[{i}]"),
+                &m.view.depth_texgen(&camera_view),
+            );
             program.set_i32(gl, &format!("u_face_maps[{i}]"), 1 + i as i32);
             // SAFETY: binds our depth textures to units 1-6.
             unsafe {
@@ -107,6 +132,7 @@ fn bind_light(ctx: &PassContext, program: &Program, lp: &LightPlan, shadow: &Lit
     let camera_view = ctx.plan.camera.view;
     program.set_mat4(gl, "u_view", &camera_view);
     program.set_mat4(gl, "u_texgen", &s.view.texgen(&camera_view));
+    program.set_mat4(gl, "u_texgen_depth", &s.view.depth_texgen(&camera_view));
     program.set_f32(gl, "u_map_size", o.size as f32);
     program.set_i32(gl, "u_pcf_size", o.pcf_size as i32);
     program.set_i32(gl, "u_sm_alpha_func", o.alpha_func as i32);
@@ -143,12 +169,13 @@ fn bind_light(ctx: &PassContext, program: &Program, lp: &LightPlan, shadow: &Lit
     }
 }
 
-/// Draw only where the stencil compares to 0 with `func` (EQUAL: lit; NOTEQUAL: shadowed).
-pub fn stencil_gate(gl: &glow::Context, func: u32) {
+/// Draw only where the stencil's `bits` compare to 0 with `func` (EQUAL: lit; NOTEQUAL:
+/// shadowed).
+pub fn stencil_gate(gl: &glow::Context, func: u32, bits: u32) {
     // SAFETY: fixed-function state.
     unsafe {
         gl.enable(glow::STENCIL_TEST);
-        gl.stencil_func(func, 0, 0xff);
+        gl.stencil_func(func, 0, bits);
         gl.stencil_op(glow::KEEP, glow::KEEP, glow::KEEP);
         // No stencil writes: llvmpipe then tests depth and stencil before the shader runs
         // (early test) even though the shader discards, so hidden fragments cost nothing.
@@ -163,6 +190,18 @@ pub fn stencil_gate(gl: &glow::Context, func: u32) {
 pub fn lit_stencil(gl: &glow::Context, shadow: &LitShadow, once: bool) {
     match (shadow, once) {
         (LitShadow::Stencil { test: false }, _) => {}
+        // Count zero or decided by the map (the top bit is not compared); the shader drops
+        // what the map shadows. Marks add one to the count bits.
+        (LitShadow::Hybrid(_), true) => {
+            // SAFETY: fixed-function state.
+            unsafe {
+                gl.enable(glow::STENCIL_TEST);
+                gl.stencil_func(glow::EQUAL, 0, COUNT_BITS);
+                gl.stencil_op(glow::KEEP, glow::KEEP, glow::INCR);
+                gl.stencil_mask(0xff);
+            }
+        }
+        (LitShadow::Hybrid(_), false) => stencil_gate(gl, glow::EQUAL, COUNT_BITS),
         (_, true) => {
             // SAFETY: fixed-function state.
             unsafe {
@@ -172,7 +211,7 @@ pub fn lit_stencil(gl: &glow::Context, shadow: &LitShadow, once: bool) {
                 gl.stencil_mask(0xff);
             }
         }
-        (LitShadow::Stencil { test: true }, false) => stencil_gate(gl, glow::EQUAL),
+        (LitShadow::Stencil { test: true }, false) => stencil_gate(gl, glow::EQUAL, 0xff),
         (_, false) => {}
     }
 }
@@ -243,9 +282,15 @@ pub fn draw_mask(
     DrawState::OVER_DEPTH.apply(gl);
     bind_light(ctx, program, lp, shadow);
     let items = ctx.gpu.draw_list_of(ctx.scene, receivers);
-    if let LitShadow::Stencil { .. } = shadow {
-        for (func, decision) in [(glow::EQUAL, 1), (glow::NOTEQUAL, 2)] {
-            stencil_gate(gl, func);
+    let counted = match shadow {
+        LitShadow::Stencil { .. } => Some((0xff, 1)),
+        // Where the count bits are zero the shader decides (the map, or lit at a silhouette).
+        LitShadow::Hybrid(_) => Some((COUNT_BITS, 0)),
+        _ => None,
+    };
+    if let Some((bits, zero)) = counted {
+        for (func, decision) in [(glow::EQUAL, zero), (glow::NOTEQUAL, 2)] {
+            stencil_gate(gl, func, bits);
             program.set_i32(gl, "u_mask_value", decision);
             draw_items(ctx, program, &items, |_| {});
         }

@@ -4,6 +4,7 @@
 pub mod base;
 pub mod debug;
 pub mod gbuffer;
+pub mod hybrid;
 pub mod lit;
 pub mod shadow_map;
 pub mod state;

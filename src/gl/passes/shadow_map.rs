@@ -5,7 +5,9 @@
 use super::{PassContext, draw_items_with};
 use crate::gl::program::Program;
 use crate::gl::target::Framebuffer;
-use crate::options::{AlphaCasters, CasterFaces, DepthSource, OffsetPass, ShadowMapOptions};
+use crate::options::{
+    AlphaCasters, CasterFaces, DepthBits, DepthSource, OffsetPass, ShadowMapOptions,
+};
 use crate::scene::Cull;
 use glam::Mat4;
 use glow::HasContext;
@@ -52,6 +54,19 @@ pub struct MapView<'a> {
     pub order: usize,
     /// The plan's casters for this view; `None` draws every caster.
     pub casters: Option<&'a [u32]>,
+    /// The matrix whose depth is stored, when not `view_proj` (trapezoidal maps: drawn with
+    /// the depth program's `WARP_DEPTH` variant, which offsets in the shader).
+    pub depth_view_proj: Option<Mat4>,
+}
+
+/// The smallest depth step of a map's format: glPolygonOffset's unit `r`.
+fn depth_resolution(bits: DepthBits) -> f32 {
+    match bits {
+        DepthBits::D16 => 1.0 / 65536.0,
+        DepthBits::D24 => 1.0 / 16_777_216.0,
+        // A float's step near 1, where a map's depths gather.
+        DepthBits::D32f => 1.0 / 8_388_608.0,
+    }
 }
 
 /// Draws the view's casters into `target`.
@@ -62,6 +77,17 @@ pub fn render(ctx: &PassContext, program: &Program, view: &MapView, target: &Dep
     program.bind(gl);
     program.set_mat4(gl, "u_view_proj", &view.view_proj);
     program.set_i32(gl, "u_texture", 0);
+    if let Some(depth) = view.depth_view_proj {
+        program.set_mat4(gl, "u_depth_view_proj", &depth);
+        let (factor, units) = match (offset_for(o, view.order), o.offset_pass) {
+            (Some(f), OffsetPass::ShadowMap | OffsetPass::Both) => f,
+            _ => (0.0, 0.0),
+        };
+        let r = depth_resolution(o.depth_bits);
+        program.set_vec2(gl, "u_offset", glam::Vec2::new(factor, units * r));
+        // SAFETY: the offset is the shader's here.
+        unsafe { gl.disable(glow::POLYGON_OFFSET_FILL) };
+    }
     draw_items_with(
         ctx,
         program,

@@ -82,17 +82,30 @@ fn draw_parts(
     }
 }
 
+/// Every part of the light's volumes, whatever its counting, without depth bounds.
+pub fn draw_all_parts(gl: &glow::Context, program: &Program, v: &LightVolumes<'_>) {
+    for counting in [Counting::ZFail, Counting::ZPass] {
+        draw_parts(gl, program, v, counting, None);
+    }
+}
+
 /// Clears the stencil and counts the light's volumes into it. Parts with a rectangle of their
 /// own draw inside it; the scissor is left as `light_scissor` (the caller's) afterwards.
+/// `masked`: the hybrid's computation mask is in the stencil already (not cleared); counts go
+/// to its count bits where its mask bit is clear (`passes::hybrid`).
 pub fn draw(
     ctx: &PassContext,
     program: &Program,
     volumes: &LightVolumes<'_>,
     light_scissor: Option<Scissor>,
+    masked: bool,
 ) {
     let gl = ctx.gl;
     let o = &ctx.options.shadow_volume;
-    begin(gl, o);
+    begin(gl, o, !masked);
+    if masked {
+        super::hybrid::mask_counting(gl);
+    }
     // SAFETY: fixed-function state.
     unsafe {
         // Each draw's depth clip planes (zero where it has none); none on ES.
@@ -131,14 +144,16 @@ pub fn draw(
 }
 
 /// The state every volume pass counts with (shader or fixed-function): the stencil cleared
-/// and always passing, colour and depth writes off, depth test LESS, the options' offset and
-/// depth clamp.
-pub fn begin(gl: &glow::Context, o: &ShadowVolumeOptions) {
+/// (with `clear`) and always passing, colour and depth writes off, depth test LESS, the
+/// options' offset and depth clamp.
+pub fn begin(gl: &glow::Context, o: &ShadowVolumeOptions, clear: bool) {
     // SAFETY: fixed-function state on the bound framebuffer.
     unsafe {
         gl.stencil_mask(0xff);
-        gl.clear_stencil(0);
-        gl.clear(glow::STENCIL_BUFFER_BIT);
+        if clear {
+            gl.clear_stencil(0);
+            gl.clear(glow::STENCIL_BUFFER_BIT);
+        }
         gl.color_mask(false, false, false, false);
         gl.depth_mask(false);
         gl.enable(glow::DEPTH_TEST);
@@ -216,6 +231,7 @@ pub fn end(gl: &glow::Context, o: &ShadowVolumeOptions) {
     // SAFETY: fixed-function state; only what was enabled (ES may lack depth clamp).
     unsafe {
         gl.stencil_op(glow::KEEP, glow::KEEP, glow::KEEP);
+        gl.stencil_mask(0xff);
         gl.disable(glow::POLYGON_OFFSET_FILL);
         if o.projection == VolumeProjection::DepthClamp {
             gl.disable(glow::DEPTH_CLAMP);
