@@ -645,6 +645,10 @@ define_options! {
         /// technique may get wrong: measured on sampled pixels where the frames are sampled
         /// (`estimate.*`), else estimated (see `plan::auto`).
         accuracy: f32 = 0.5, in 0.0 ..= 100.0;
+        /// The techniques `technique = auto` chooses among, comma separated (any of
+        /// shadow_map, psm, tsm, shadow_volume, hybrid). Each one is measured twice before a
+        /// one-frame command's frame, so every addition costs learning frames.
+        auto_among: String = "shadow_map,shadow_volume".to_string();
     }
 
     /// The frame planner (beyond the paper, whose section 4.2 leaves this speed on the table:
@@ -1068,6 +1072,29 @@ impl Options {
             .collect()
     }
 
+    /// The techniques `auto` chooses among (`auto_among`); the default pair if it does not
+    /// parse (`validate` reports that).
+    pub fn auto_choices(&self) -> Vec<Technique> {
+        self.parse_auto_among()
+            .unwrap_or_else(|_| vec![Technique::ShadowMap, Technique::ShadowVolume])
+    }
+
+    fn parse_auto_among(&self) -> Result<Vec<Technique>, OptionError> {
+        let text = self.auto_among.trim();
+        let bad = |reason: String| bad_value("auto_among", text, reason);
+        let mut out = Vec::new();
+        for part in text.split(',') {
+            let t = Technique::parse_value(part).map_err(bad)?;
+            if matches!(t, Technique::None | Technique::Auto) {
+                return Err(bad(format!("`{t}` is not a shadow technique")));
+            }
+            if !out.contains(&t) {
+                out.push(t);
+            }
+        }
+        Ok(out)
+    }
+
     /// The technique light `index` uses: its override, else `technique`.
     pub fn technique_for(&self, index: usize) -> Technique {
         self.technique_overrides()
@@ -1110,6 +1137,7 @@ impl Options {
     /// Validates cross-field rules that a single `set` cannot see.
     pub fn validate(&self) -> Result<(), OptionError> {
         self.technique_overrides()?;
+        self.parse_auto_among()?;
         let only = self.lighting.only.trim();
         if !(only.is_empty() || only.eq_ignore_ascii_case("all")) {
             for part in only.split(',') {
@@ -1187,7 +1215,15 @@ mod tests {
         assert_eq!(
             kind("technique"),
             OptionKind::Choice {
-                choices: vec!["none", "shadow_map", "shadow_volume", "auto"]
+                choices: vec![
+                    "none",
+                    "shadow_map",
+                    "shadow_volume",
+                    "auto",
+                    "psm",
+                    "tsm",
+                    "hybrid"
+                ]
             }
         );
         assert_eq!(

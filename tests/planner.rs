@@ -15,7 +15,7 @@ use shadowlab::options::{BackendChoice, Options, Technique};
 use shadowlab::plan::Plan;
 use shadowlab::plan::cull::sphere_meets_frustum;
 use shadowlab::plan::volume_draws::VolumeStats;
-use shadowlab::plan::{CameraSetup, auto::LEARNING_FRAMES};
+use shadowlab::plan::{CameraSetup, auto::learning_frames};
 use shadowlab::scene::Camera;
 use shadowlab::scene::Scene;
 use shadowlab::scene::path::PathKey;
@@ -787,7 +787,7 @@ fn auto_picks_per_light_from_measured_cost_and_the_accuracy_target() {
     let auto = with(&options, &["technique=auto"]);
     let (_ctx, mut r) = gl_on(BackendChoice::Egl, &auto);
     r.load_scene(&scene).unwrap();
-    for _ in 0..LEARNING_FRAMES {
+    for _ in 0..learning_frames(&auto) {
         r.render_with(&scene, &auto, FrameRequest::default())
             .unwrap();
     }

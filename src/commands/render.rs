@@ -6,7 +6,7 @@ use glam::Vec3;
 use shadowlab::frame::Frame;
 use shadowlab::gl::FrameRequest;
 use shadowlab::options::Technique;
-use shadowlab::plan::auto::LEARNING_FRAMES;
+use shadowlab::plan::auto::learning_frames;
 use shadowlab::presets::Preset;
 use shadowlab::report::estimate::{learn_auto, sampled_frame};
 use shadowlab::scene::Scene;
@@ -195,7 +195,7 @@ pub fn run(common: &CommonArgs, args: &Args) -> Result<()> {
                 &scene.camera,
                 &options,
                 r,
-                LEARNING_FRAMES as u64,
+                learning_frames(&options) as u64,
             )?;
             (s.frame, Some((s.sample, s.trace_ms)))
         }

@@ -28,18 +28,17 @@ use std::collections::HashMap;
 /// Weight of the newest frame in the cost average.
 const NEWEST: f64 = 0.3;
 
-/// Frames a one-frame command renders first so that `auto` has measured both techniques of
-/// every light (two frames each: see [`WARM_FRAMES`]) and then the cheaper again with its
-/// caches warm.
-pub const LEARNING_FRAMES: usize = 6;
+/// Frames a one-frame command renders first so that `auto` has measured every technique it
+/// chooses among (`auto_among`) for every light, two frames each (see [`WARM_FRAMES`]), and
+/// then the cheapest again with its caches warm: 6 for the default pair.
+pub fn learning_frames(options: &Options) -> usize {
+    2 * options.auto_choices().len() + 2
+}
 
 /// Frames of a technique before its cost counts: a light's first frame under a technique
 /// compiles its programs and draws its maps afresh (kept while the light and its casters stay:
 /// `plan.cache_maps`), which later frames do not. The second frame's time replaces the first's.
 pub const WARM_FRAMES: u32 = 2;
-
-/// The techniques `auto` chooses among.
-pub const CHOICES: [Technique; 2] = [Technique::ShadowMap, Technique::ShadowVolume];
 
 /// A light's sampled error under one technique, and the options it was measured with.
 #[derive(Debug, Clone)]
@@ -113,7 +112,7 @@ impl AutoMemory {
             }
         }
         for &(light, technique) in techniques {
-            if !CHOICES.contains(&technique) {
+            if matches!(technique, Technique::None | Technique::Auto) {
                 continue;
             }
             self.last.insert(light, technique);
@@ -147,7 +146,7 @@ impl AutoMemory {
             let Some(&(_, technique)) = ran.iter().find(|(l, _)| *l == s.light) else {
                 continue;
             };
-            if !CHOICES.contains(&technique) {
+            if matches!(technique, Technique::None | Technique::Auto) {
                 continue;
             }
             let text = technique_options(technique, options);
@@ -245,7 +244,8 @@ impl Judged {
 pub fn choose(light: usize, options: &Options, memory: &AutoMemory, alpha_casters: bool) -> Choice {
     let target = options.accuracy as f64 / 100.0;
     let current = memory.last(light);
-    let judged: Vec<Judged> = CHOICES
+    let judged: Vec<Judged> = options
+        .auto_choices()
         .iter()
         .map(|&t| {
             let measured = memory.error(light, t, options);
@@ -280,7 +280,7 @@ pub fn choose(light: usize, options: &Options, memory: &AutoMemory, alpha_caster
         let best = judged
             .iter()
             .min_by(|a, b| a.error.value.total_cmp(&b.error.value))
-            .expect("two choices");
+            .expect("at least one choice");
         let keep = judged
             .iter()
             .find(|j| Some(j.technique) == current)

@@ -5,7 +5,7 @@ use crate::frame::Frame;
 use crate::gl::{FrameRequest, RenderError, Renderer};
 use crate::images::GBuffer;
 use crate::options::{Options, Technique};
-use crate::plan::auto::LEARNING_FRAMES;
+use crate::plan::auto::learning_frames;
 use crate::scene::{Camera, Scene};
 use crate::truth::Reference;
 use crate::truth::sampled::{FrameSample, sample_frame};
@@ -117,7 +117,7 @@ pub fn learn_auto(
     }
     let mut learning = options.clone();
     learning.estimate.samples = options.estimate.samples.saturating_mul(LEARNING_SAMPLES);
-    for i in 0..LEARNING_FRAMES {
+    for i in 0..learning_frames(options) {
         match reference.filter(|_| options.estimate.samples > 0) {
             Some(r) => {
                 sampled_frame(renderer, scene, &scene.camera, &learning, r, i as u64)?;

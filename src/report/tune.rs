@@ -53,12 +53,41 @@ pub fn space() -> Vec<Dimension> {
         dim("shadow_volume.stencil", &["two_pass", "separate"], SV),
         dim("shadow_volume.edge_rule", &["paper", "signed"], SV),
         dim("shadow_volume.casters", &["front", "both"], SV),
+        dim(
+            "psm.min_near",
+            &["0.01", "0.05", "0.2"],
+            Some(Technique::Psm),
+        ),
+        dim(
+            "psm.tsm_focus",
+            &["0.1", "0.2", "0.5"],
+            Some(Technique::Tsm),
+        ),
+        dim("hybrid.radius", &["1", "2"], Some(Technique::Hybrid)),
         dim("plan.enabled", &["true", "false"], None),
     ]
 }
 
-/// The techniques searched.
-pub const TECHNIQUES: [Technique; 2] = [Technique::ShadowMap, Technique::ShadowVolume];
+/// The techniques searched: the thesis's four and trapezoidal maps.
+pub const TECHNIQUES: [Technique; 5] = [
+    Technique::ShadowMap,
+    Technique::ShadowVolume,
+    Technique::Psm,
+    Technique::Tsm,
+    Technique::Hybrid,
+];
+
+/// Whether a dimension of technique `of` applies to a configuration running `t`: the shadow
+/// map's options to every technique that draws maps, the volumes' to every one that counts
+/// volumes, the others to their own.
+fn applies(of: Option<Technique>, t: Technique) -> bool {
+    match of {
+        None => true,
+        Some(Technique::ShadowMap) => t.uses_maps(),
+        Some(Technique::ShadowVolume) => t.uses_volumes(),
+        Some(own) => own == t,
+    }
+}
 
 /// A configuration of the space: `base` with the values set; its label names the technique and
 /// the values that differ from `base`.
@@ -104,10 +133,7 @@ pub fn candidates(
         tries += 1;
         let t = TECHNIQUES[rng.usize(..TECHNIQUES.len())];
         let mut sets = BTreeMap::from([("technique".to_string(), t.to_string())]);
-        for d in space
-            .iter()
-            .filter(|d| d.technique.is_none() || d.technique == Some(t))
-        {
+        for d in space.iter().filter(|d| applies(d.technique, t)) {
             sets.insert(
                 d.key.to_string(),
                 d.values[rng.usize(..d.values.len())].to_string(),
@@ -566,12 +592,16 @@ mod tests {
             assert!(seen.insert(options), "{:?} twice", k.swept);
             let t = k.options.technique;
             for key in k.swept.keys() {
-                let other = if t == Technique::ShadowMap {
-                    "shadow_volume."
-                } else {
-                    "shadow_map."
-                };
-                assert!(!key.starts_with(other), "{t} sets {key}");
+                let forbidden = [
+                    ("shadow_map.", !t.uses_maps()),
+                    ("shadow_volume.", !t.uses_volumes()),
+                    ("psm.min_near", t != Technique::Psm),
+                    ("psm.tsm_focus", t != Technique::Tsm),
+                    ("hybrid.", t != Technique::Hybrid),
+                ];
+                for (prefix, no) in forbidden {
+                    assert!(!(no && key.starts_with(prefix)), "{t} sets {key}");
+                }
             }
         }
         // The same seed, the same draw.

@@ -169,6 +169,9 @@ mod tests {
                 FieldValue::Text(_) if f.key == "lighting.techniques" => {
                     FieldValue::Text("0:none".into())
                 }
+                FieldValue::Text(_) if f.key == "auto_among" => {
+                    FieldValue::Text("shadow_map,hybrid".into())
+                }
                 FieldValue::Text(_) => FieldValue::Text("1".into()),
             };
             let mut o = base.clone();

@@ -493,9 +493,11 @@ mod tests {
         let mut s = state("");
         s.options.technique = Technique::ShadowMap;
         s.cycle_light_technique(0);
-        assert_eq!(s.options.lighting.techniques, "0:shadow_volume");
-        s.cycle_light_technique(0);
-        s.cycle_light_technique(0);
+        assert_eq!(s.options.lighting.techniques, "0:psm");
+        for _ in 0..5 {
+            s.cycle_light_technique(0);
+        }
+        assert_eq!(s.options.lighting.techniques, "0:none");
         s.cycle_light_technique(0);
         assert_eq!(s.options.technique_for(0), Technique::ShadowMap);
         assert_eq!(s.options.lighting.techniques, "");

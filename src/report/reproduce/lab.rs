@@ -17,6 +17,8 @@ pub struct Lab<'a> {
     pub scene: &'a Scene,
     /// The scene file's name without `.toml`.
     pub name: String,
+    /// The scene file as the commands name it (`assets/scenes/<name>.toml` unless set).
+    scene_file: String,
     /// The scene's options at the report's size.
     pub base: Options,
     /// Assignments every measurement of this lab carries (and its commands print): the paper's
@@ -55,6 +57,7 @@ impl<'a> Lab<'a> {
             bench,
             scene,
             name: name.to_string(),
+            scene_file: format!("assets/scenes/{name}.toml"),
             base,
             fixed: super::PAPER_FRAME.to_vec(),
             quick: settings.quick,
@@ -62,6 +65,17 @@ impl<'a> Lab<'a> {
             bar,
             rows: Vec::new(),
         }
+    }
+
+    /// The lab of a scene file outside `assets/scenes` (a hard case), as its commands name it.
+    pub fn with_scene_file(mut self, file: &str) -> Lab<'a> {
+        self.scene_file = file.to_string();
+        self
+    }
+
+    /// Every row measured so far.
+    pub fn rows(&self) -> &[BenchRow] {
+        &self.rows
     }
 
     /// The renderer the lab measures on.
@@ -146,8 +160,8 @@ impl<'a> Lab<'a> {
     /// `shadowlab render` with this scene and these assignments, writing masks.
     pub fn render_command(&self, sets: &[&str]) -> String {
         let mut s = format!(
-            "shadowlab render --scene assets/scenes/{}.toml --size {}x{}",
-            self.name, self.base.width, self.base.height
+            "shadowlab render --scene {} --size {}x{}",
+            self.scene_file, self.base.width, self.base.height
         );
         for a in self.fixed.iter().chain(sets) {
             s.push_str(&format!(" --set {a}"));
@@ -159,8 +173,8 @@ impl<'a> Lab<'a> {
     /// `shadowlab bench` with this scene, fixed assignments and one sweep.
     pub fn bench_command(&self, sets: &[&str], sweep: &str) -> String {
         let mut s = format!(
-            "shadowlab bench --scene assets/scenes/{}.toml --size {}x{}",
-            self.name, self.base.width, self.base.height
+            "shadowlab bench --scene {} --size {}x{}",
+            self.scene_file, self.base.width, self.base.height
         );
         for a in self.fixed.iter().chain(sets) {
             s.push_str(&format!(" --set {a}"));

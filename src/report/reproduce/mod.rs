@@ -14,6 +14,7 @@ mod figures;
 mod lab;
 mod page;
 mod pareto;
+mod thesis;
 pub use pareto::fixed_sweep;
 
 pub use lab::{Lab, pct};
@@ -219,6 +220,8 @@ const ORDER: &[&str] = &[
     "thesis-fig13-14",
     "thesis-fig20-21",
     "thesis-fig22",
+    "thesis-ch4",
+    "thesis-ch5",
     "claim-sm-lights",
     "claim-sv-lights",
 ];
@@ -237,7 +240,7 @@ pub fn run(
     })?;
     let sweep_scenes = settings.sweep_scenes();
     // Units of work: the figure sections and both claims, then one sweep per scene.
-    let figure_units = figures::SECTIONS + 2 * claims::SECTIONS;
+    let figure_units = figures::SECTIONS + 2 * claims::SECTIONS + thesis::SECTIONS;
     let bar = if settings.progress {
         let b = ProgressBar::new((figure_units + sweep_scenes.len()) as u64);
         b.set_style(
@@ -290,6 +293,8 @@ pub fn run(
         let mut lab = Lab::new(renderer, &scene, name, options, settings, out, &bar);
         if name == "oa_dm1" {
             sections.extend(figures::run(&mut lab)?);
+            sections.push(thesis::chapter5(&mut lab)?);
+            bar.inc(1);
         }
         sections.extend(claims::run(&mut lab)?);
         report.rows.extend(lab.into_rows());
@@ -297,6 +302,25 @@ pub fn run(
     if settings.quick {
         // q3dm6ish's claims were skipped: count them as done.
         bar.inc(claims::SECTIONS as u64);
+    }
+    {
+        // Perspective shadow maps on the hard case made for them.
+        let name = "../hard/near_receiver";
+        let (scene, options, _) = load_scene(settings, name)?;
+        renderer.load_scene(&scene)?;
+        let mut lab = Lab::new(
+            renderer,
+            &scene,
+            "near_receiver",
+            options,
+            settings,
+            out,
+            &bar,
+        )
+        .with_scene_file("assets/hard/near_receiver.toml");
+        sections.push(thesis::chapter4(&mut lab)?);
+        report.rows.extend(lab.into_rows());
+        bar.inc(1);
     }
 
     // Accuracy against time on every scene.
@@ -311,6 +335,7 @@ pub fn run(
         renderer.load_scene(&scene)?;
         let mut lab = Lab::new(renderer, &scene, name, options, settings, out, &bar);
         sweeps.push(pareto::run(&mut lab)?);
+        sweeps.push(thesis::comparison(&lab, lab.rows())?);
         sweeps.push(pareto::frontier(&mut lab)?);
         report.rows.extend(lab.into_rows());
         bar.inc(1);

@@ -18,7 +18,7 @@ fn configs(quick: bool) -> Vec<(&'static str, Vec<&'static str>)> {
     // The lab measures the paper's frame; these rows switch the planner back on.
     const PLANNER: &str = "plan.enabled=true";
     if quick {
-        return vec![
+        let mut quick = vec![
             ("shadows off", vec!["technique=none"]),
             ("SM 512 (paper)", vec![SM]),
             (
@@ -35,8 +35,10 @@ fn configs(quick: bool) -> Vec<(&'static str, Vec<&'static str>)> {
             ("SM 512 planner", vec![SM, PLANNER]),
             ("SV planner", vec![SV, PLANNER]),
         ];
+        quick.extend(super::thesis::sweep_configs());
+        return quick;
     }
-    vec![
+    let mut full = vec![
         ("shadows off", vec!["technique=none"]),
         ("SM 512 (paper)", vec![SM]),
         ("SM 256", vec![SM, "shadow_map.size=256"]),
@@ -67,7 +69,10 @@ fn configs(quick: bool) -> Vec<(&'static str, Vec<&'static str>)> {
             vec![SV, PLANNER, "shadow_volume.edge_rule=signed"],
         ),
         ("auto planner", vec!["technique=auto", PLANNER]),
-    ]
+    ];
+    // The thesis's other two algorithms and trapezoidal maps (its final comparison).
+    full.extend(super::thesis::sweep_configs());
+    full
 }
 
 /// The fixed sweep of this section over a scene's options `base`, as the lab measures it (the
