@@ -4,6 +4,7 @@
 
 use super::{CommonArgs, scene_options, start_gl};
 use anyhow::{Result, bail};
+use shadowlab::options::{OptionValue, Technique};
 use shadowlab::q3::pk3::Vfs;
 use shadowlab::report::check::{MapCheck, check_map};
 use std::io::Write;
@@ -19,6 +20,10 @@ pub struct Args {
     all: bool,
     /// A map name (`oa_dm1`) or a bsp path inside the pk3s.
     map: Option<String>,
+    /// The techniques measured, each with the planner on and off, comma separated (any of
+    /// shadow_map, psm, tsm, shadow_volume, hybrid).
+    #[arg(long, default_value = "shadow_map,shadow_volume")]
+    techniques: String,
 }
 
 /// Frames are this size unless `--size` says otherwise: every map with every light twice per
@@ -34,6 +39,17 @@ pub fn run(common: &CommonArgs, args: &Args) -> Result<()> {
     };
     let mut common = common.clone();
     common.size.get_or_insert_with(|| DEFAULT_SIZE.to_string());
+    let techniques = args
+        .techniques
+        .split(',')
+        .map(|t| Technique::parse_value(t).map_err(|e| anyhow::anyhow!("--techniques: {e}")))
+        .collect::<Result<Vec<_>>>()?;
+    if techniques
+        .iter()
+        .any(|t| matches!(t, Technique::None | Technique::Auto))
+    {
+        bail!("--techniques: name shadow techniques (not none or auto)");
+    }
     let mut options = scene_options(&common, &toml::Table::new())?;
     options.q3.progress = false;
     let (_ctx, mut renderer) = start_gl(&options)?;
@@ -42,7 +58,7 @@ pub fn run(common: &CommonArgs, args: &Args) -> Result<()> {
     for (i, map) in maps.iter().enumerate() {
         eprintln!("[{}/{}] {map}", i + 1, maps.len());
         let line = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
-            check_map(&mut renderer, &args.data, map, &options)
+            check_map(&mut renderer, &args.data, map, &options, &techniques)
         }))
         .unwrap_or_else(|panic| MapCheck {
             map: map.clone(),

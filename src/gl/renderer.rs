@@ -1142,7 +1142,9 @@ impl<'a> FrameRun<'a> {
         for (pi, lp) in plan.lights.iter().enumerate() {
             set_scissor(self.ctx.gl, lp.scissor);
             if lp.technique == Technique::Hybrid {
-                go_on!(self.hybrid_light(pi, maps));
+                if let Some(image) = go_on!(self.hybrid_light(pi, maps)) {
+                    stencil_image = Some(image);
+                }
             } else if self.volumes_of(lp).is_some() {
                 if let Some(image) = go_on!(self.volume_light(lp)) {
                     stencil_image = Some(image);
@@ -1172,8 +1174,9 @@ impl<'a> FrameRun<'a> {
 
     /// A hybrid light (Chan & Durand): its computation mask marked from its maps, its volumes
     /// counted where the mask lets them, then one lit pass where the map decides or the count
-    /// is zero (`passes::hybrid`).
-    fn hybrid_light(&mut self, pi: usize, maps: &[ViewMap]) -> Flow<()> {
+    /// is zero (`passes::hybrid`). Returns its stencil (mask bit and counts) when the request
+    /// asks for it.
+    fn hybrid_light(&mut self, pi: usize, maps: &[ViewMap]) -> Flow<Option<StencilImage>> {
         let gl = self.ctx.gl;
         let lp = &self.ctx.plan.lights[pi];
         let masked = self.ctx.options.hybrid.mask;
@@ -1208,6 +1211,17 @@ impl<'a> FrameRun<'a> {
         go_on!(self.step(StepKind::ComputationMask, Some(lp), None, |_| {
             debug::stencil_image(&debug::read_stencil(gl, fbo, w, h), w, h, true)
         }));
+        let stencil = (self.request.stencil_of == Some(lp.light)).then(|| {
+            let values = debug::read_stencil(gl, fbo, w, h);
+            self.target.bind(gl);
+            StencilImage {
+                light: lp.light,
+                width: w,
+                height: h,
+                values,
+                wraps: true,
+            }
+        });
         self.timer.begin(gl, PassId::light(lp.light, Stage::Lit));
         draw_maps(
             &self.ctx,
@@ -1217,7 +1231,7 @@ impl<'a> FrameRun<'a> {
             (MapPass::Lit, true),
         );
         go_on!(self.step(StepKind::Lit, Some(lp), None, Self::color_image));
-        Ok(ControlFlow::Continue(()))
+        Ok(ControlFlow::Continue(stencil))
     }
 
     /// A shadow-volume light: its volumes into the stencil, its lit pass where the count is

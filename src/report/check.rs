@@ -89,8 +89,14 @@ pub fn scene_file(data: &Path, bsp: &str) -> SceneFile {
     }
 }
 
-/// Loads and checks one map; its line says why where it cannot.
-pub fn check_map(renderer: &mut Renderer, data: &Path, bsp: &str, options: &Options) -> MapCheck {
+/// Loads and checks one map under `techniques`; its line says why where it cannot.
+pub fn check_map(
+    renderer: &mut Renderer,
+    data: &Path,
+    bsp: &str,
+    options: &Options,
+    techniques: &[Technique],
+) -> MapCheck {
     let mut line = MapCheck {
         map: bsp.to_string(),
         ..MapCheck::default()
@@ -105,7 +111,7 @@ pub fn check_map(renderer: &mut Renderer, data: &Path, bsp: &str, options: &Opti
     };
     line.load_ms = start.elapsed().as_secs_f64() * 1e3;
     describe(&mut line, &scene, report);
-    if let Err(e) = measure_runs(renderer, &scene, options, &mut line) {
+    if let Err(e) = measure_runs(renderer, &scene, (options, techniques), &mut line) {
         line.error = Some(format!("cannot render: {e}"));
     }
     line
@@ -132,7 +138,7 @@ fn describe(line: &mut MapCheck, scene: &Scene, report: LoadReport) {
 fn measure_runs(
     renderer: &mut Renderer,
     scene: &Scene,
-    options: &Options,
+    (options, techniques): (&Options, &[Technique]),
     line: &mut MapCheck,
 ) -> Result<(), crate::gl::RenderError> {
     renderer.load_scene(scene)?;
@@ -141,7 +147,7 @@ fn measure_runs(
         masks: true,
         ..FrameRequest::default()
     };
-    for technique in [Technique::ShadowMap, Technique::ShadowVolume] {
+    for &technique in techniques {
         let mut masks: Vec<Vec<Mask>> = Vec::new();
         for planner in [true, false] {
             let mut o = options.clone();
