@@ -620,6 +620,22 @@ option_enum! {
 }
 
 option_enum! {
+    /// Where the lit pass's texgen planes are applied (the shader pipeline; the legacy one is
+    /// glTexGen's own, eye-linear).
+    pub enum TexgenSpace {
+        /// To eye coordinates, with planes composed in single precision through the camera's
+        /// inverse, as glTexGen(GL_EYE_LINEAR) does (the paper). At Quake 3 scale (coordinates
+        /// in the thousands, lights tens of units from walls) the rounding exceeds the polygon
+        /// offset's constant term: walls facing an omni light's face head-on get acne (oa_dm3's
+        /// light 2: 4.7% of its receivers falsely shadowed under six spot maps).
+        EyeLinear = "eye_linear",
+        /// The same planes composed in double precision and applied to the position relative to
+        /// the light, so no large coordinates cancel.
+        Light = "light",
+    }
+}
+
+option_enum! {
     /// Alpha-tested surfaces in the shadow map pass.
     pub enum AlphaCasters {
         /// The depth pass samples alpha and discards like the surface does.
@@ -882,6 +898,9 @@ define_options! {
         omni: OmniMode = OmniMode::SixSpots;
         /// Alpha-tested casters: alpha test in the depth pass, or drawn solid.
         alpha_casters: AlphaCasters = AlphaCasters::Test;
+        /// Where the texgen planes apply: eye coordinates as glTexGen does (the paper), or
+        /// positions relative to the light with the planes composed in double precision.
+        texgen: TexgenSpace = TexgenSpace::Light;
     }
 
     /// Warped shadow maps: perspective (`technique = psm`, thesis chapter 4) and trapezoidal

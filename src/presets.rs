@@ -43,6 +43,7 @@ const PAPER: &[(&str, &str)] = &[
     ("shadow_map.outside", "clamp"),
     ("shadow_map.omni", "six_spots"),
     ("shadow_map.cull", "front"),
+    ("shadow_map.texgen", "eye_linear"),
     ("shadow_volume.casters", "front"),
     ("shadow_volume.counting", "zfail"),
     ("shadow_volume.stencil", "two_pass"),
@@ -162,7 +163,8 @@ mod tests {
         // Guards the claim in the options' docs that the other defaults are the paper's (the
         // casters: the paper's one-sided faces lose shadows on open worlds; the offset growth
         // erases later lights' contact shadows on maps with many lights; the light marks keep
-        // overlapping triangles from taking a light twice; docs/checks.md).
+        // overlapping triangles from taking a light twice; docs/checks.md; the texgen space:
+        // eye-linear planes round past the offset at Quake 3 scale, docs/shadow-maps.md).
         let keys: Vec<String> = Preset::Paper
             .differences(&Options::default())
             .into_iter()
@@ -175,6 +177,7 @@ mod tests {
                 "plan.enabled",
                 "shadow_map.cull",
                 "shadow_map.offset_growth",
+                "shadow_map.texgen",
                 "shadow_volume.casters",
                 "technique"
             ]

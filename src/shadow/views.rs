@@ -53,6 +53,24 @@ impl ShadowView {
         bias_matrix() * self.projection * self.view * camera_view.inverse()
     }
 
+    /// [`Self::texgen`] for positions relative to `origin` (`shadow_map.texgen = light`): the
+    /// same planes composed in double precision, so the shader applies them to small numbers.
+    pub fn texgen_relative(&self, origin: Vec3) -> Mat4 {
+        relative(
+            bias_matrix().as_dmat4() * self.projection.as_dmat4() * self.view.as_dmat4(),
+            origin,
+        )
+    }
+
+    /// [`Self::depth_texgen`] for positions relative to `origin`.
+    pub fn depth_texgen_relative(&self, origin: Vec3) -> Mat4 {
+        let depth = match self.depth_view_proj {
+            Some(m) => m.as_dmat4(),
+            None => self.projection.as_dmat4() * self.view.as_dmat4(),
+        };
+        relative(bias_matrix().as_dmat4() * depth, origin)
+    }
+
     /// The world → clip matrix whose depth the map holds.
     pub fn depth_matrix(&self) -> Mat4 {
         self.depth_view_proj.unwrap_or_else(|| self.view_proj())
@@ -71,6 +89,11 @@ impl ShadowView {
         let (r0, r1, r2, r3) = (m.row(0), m.row(1), m.row(2), m.row(3));
         [r3 + r0, r3 - r0, r3 + r1, r3 - r1, r3 + r2]
     }
+}
+
+/// `m` (world → clip, double precision) taking positions relative to `origin` instead.
+fn relative(m: glam::DMat4, origin: Vec3) -> Mat4 {
+    (m * glam::DMat4::from_translation(origin.as_dvec3())).as_mat4()
 }
 
 /// The cube face whose axis is the major axis of `d` (ties go to x, then y): the face partition

@@ -5,11 +5,11 @@ use super::shadow_map::offset_for;
 use super::state::DrawState;
 use super::{PassContext, draw_items};
 use crate::gl::program::{Program, has_clip_distances};
-use crate::options::{OffsetPass, Outside};
+use crate::options::{OffsetPass, Outside, TexgenSpace};
 use crate::plan::LightPlan;
 use crate::scene::{LightKind, light::SPOT_INNER_FRACTION};
 use crate::shadow::views::{ShadowView, ViewKind};
-use glam::Vec3;
+use glam::{Mat4, Vec3};
 use glow::HasContext;
 
 /// A shadow map to test the light's fragments against.
@@ -102,21 +102,18 @@ fn bind_maps(ctx: &PassContext, program: &Program, lp: &LightPlan, shadow: &LitS
             }
         }
     }
+    let space = TexgenFrame::of(ctx, lp);
     if let LitShadow::Faces(maps) = shadow {
-        let camera_view = ctx.plan.camera.view;
-        program.set_mat4(gl, "u_view", &camera_view);
+        program.set_mat4(gl, "u_view", &space.to_texgen_space);
         program.set_f32(gl, "u_map_size", o.size as f32);
         program.set_i32(gl, "u_pcf_size", o.pcf_size as i32);
         program.set_i32(gl, "u_sm_alpha_func", o.alpha_func as i32);
         program.set_f32(gl, "u_sm_alpha_ref", o.alpha_ref);
         program.set_i32(gl, "u_face", -1);
         for (i, m) in maps.iter().enumerate() {
-            program.set_mat4(gl, &format!("u_texgens[{i}]"), &m.view.texgen(&camera_view));
-            program.set_mat4(
-                gl,
-                &format!("u_texgen_depths[{i}]"),
-                &m.view.depth_texgen(&camera_view),
-            );
+            let (texgen, depth) = space.texgens(m.view);
+            program.set_mat4(gl, &format!("u_texgens[{i}]"), &texgen);
+            program.set_mat4(gl, &format!("u_texgen_depths[{i}]"), &depth);
             program.set_i32(gl, &format!("u_face_maps[{i}]"), 1 + i as i32);
             // SAFETY: binds our depth textures to units 1-6.
             unsafe {
@@ -129,10 +126,10 @@ fn bind_maps(ctx: &PassContext, program: &Program, lp: &LightPlan, shadow: &LitS
         return;
     }
     let LitShadow::Map(s) = shadow else { return };
-    let camera_view = ctx.plan.camera.view;
-    program.set_mat4(gl, "u_view", &camera_view);
-    program.set_mat4(gl, "u_texgen", &s.view.texgen(&camera_view));
-    program.set_mat4(gl, "u_texgen_depth", &s.view.depth_texgen(&camera_view));
+    let (texgen, depth) = space.texgens(s.view);
+    program.set_mat4(gl, "u_view", &space.to_texgen_space);
+    program.set_mat4(gl, "u_texgen", &texgen);
+    program.set_mat4(gl, "u_texgen_depth", &depth);
     program.set_f32(gl, "u_map_size", o.size as f32);
     program.set_i32(gl, "u_pcf_size", o.pcf_size as i32);
     program.set_i32(gl, "u_sm_alpha_func", o.alpha_func as i32);
@@ -165,6 +162,47 @@ fn bind_maps(ctx: &PassContext, program: &Program, lp: &LightPlan, shadow: &LitS
                 program.set_vec4(gl, &format!("u_clip_planes[{i}]"), *p);
                 gl.enable(glow::CLIP_DISTANCE0 + i as u32);
             }
+        }
+    }
+}
+
+/// The space the lit pass's texgen planes apply in (`shadow_map.texgen`): the vertex shader
+/// computes `texgen · (to_texgen_space · world)`.
+struct TexgenFrame {
+    to_texgen_space: Mat4,
+    /// Eye-linear: the camera's view; relative to the light: the light's position.
+    kind: TexgenSpace,
+    camera_view: Mat4,
+    light: Vec3,
+}
+
+impl TexgenFrame {
+    fn of(ctx: &PassContext, lp: &LightPlan) -> TexgenFrame {
+        let camera_view = ctx.plan.camera.view;
+        let light = ctx.scene.lights[lp.light].position;
+        let kind = ctx.options.shadow_map.texgen;
+        TexgenFrame {
+            to_texgen_space: match kind {
+                TexgenSpace::EyeLinear => camera_view,
+                TexgenSpace::Light => Mat4::from_translation(-light),
+            },
+            kind,
+            camera_view,
+            light,
+        }
+    }
+
+    /// A view's texgen and its depth texgen in this space.
+    fn texgens(&self, view: &ShadowView) -> (Mat4, Mat4) {
+        match self.kind {
+            TexgenSpace::EyeLinear => (
+                view.texgen(&self.camera_view),
+                view.depth_texgen(&self.camera_view),
+            ),
+            TexgenSpace::Light => (
+                view.texgen_relative(self.light),
+                view.depth_texgen_relative(self.light),
+            ),
         }
     }
 }
