@@ -135,7 +135,8 @@ fn info_json_reports_the_egl_path_and_each_missing_feature_as_a_fallback() {
         .count();
     assert_eq!(missing, fallbacks.len());
     // No options given: the defaults, which differ from the paper's frame in the planner, the
-    // technique, the casters (both faces), the offset growth and the light marks only.
+    // technique, the casters (both faces), the offset growth, the light marks and the texgen
+    // space only.
     assert_eq!(v["preset"], "default");
     let differs: Vec<&str> = v["differs_from_paper"]
         .as_array()
@@ -150,6 +151,7 @@ fn info_json_reports_the_egl_path_and_each_missing_feature_as_a_fallback() {
             "plan.enabled",
             "shadow_map.cull",
             "shadow_map.offset_growth",
+            "shadow_map.texgen",
             "shadow_volume.casters",
             "technique"
         ]
