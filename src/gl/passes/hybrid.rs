@@ -4,14 +4,14 @@
 //! The mask lives in the stencil's top bit ([`MAP_DECIDES`]): the marking pass draws the
 //! light's receivers over the unlit pass's depth with the hybrid lit program at stage 0, which
 //! keeps only fragments the map decides (its 2×2 compares agree) or the light does not reach,
-//! and sets the bit there. The volumes then count in the low seven bits ([`COUNT_BITS`]) with
+//! and sets the bit there. The volumes then count in the low seven bits (`lit::COUNT_BITS`) with
 //! the stencil test passing only where the bit is clear, so their fragments elsewhere stop at
 //! the stencil test, before any count (on hardware, the early stencil test). Chan & Durand
 //! used the depth bounds test over a rewritten depth buffer instead; the stencil bit needs
 //! neither the extension (absent on llvmpipe) nor a depth restore.
 
 use super::PassContext;
-use super::lit::{COUNT_BITS, LitShadow, MAP_DECIDES, bind_light, finish};
+use super::lit::{LitShadow, MAP_DECIDES, bind_light, finish};
 use super::state::DrawState;
 use super::{draw_items, stencil};
 use crate::gl::program::Program;
@@ -122,14 +122,4 @@ pub fn volume_fragments(
             gl.color_mask(true, true, true, true);
         }
     })
-}
-
-/// Stencil state for counting under the mask: only where [`MAP_DECIDES`] is clear, into the
-/// count bits.
-pub fn mask_counting(gl: &glow::Context) {
-    // SAFETY: fixed-function state.
-    unsafe {
-        gl.stencil_func(glow::EQUAL, 0, MAP_DECIDES);
-        gl.stencil_mask(COUNT_BITS);
-    }
 }

@@ -11,6 +11,7 @@
 //! the stored depth (`plan.depth_bounds_test`).
 
 use super::PassContext;
+use super::lit::{COUNT_BITS, MAP_DECIDES};
 use super::state::DrawState;
 use crate::gl::depth_bounds_ext::{self, DepthBoundsExt};
 use crate::gl::program::{Program, has_clip_distances};
@@ -104,7 +105,12 @@ pub fn draw(
     let o = &ctx.options.shadow_volume;
     begin(gl, o, !masked);
     if masked {
-        super::hybrid::mask_counting(gl);
+        // Count only where the mask bit is clear, into the count bits.
+        // SAFETY: fixed-function state.
+        unsafe {
+            gl.stencil_func(glow::EQUAL, 0, MAP_DECIDES);
+            gl.stencil_mask(COUNT_BITS);
+        }
     }
     // SAFETY: fixed-function state.
     unsafe {
