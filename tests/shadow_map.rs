@@ -396,3 +396,33 @@ fn offsets_grow_per_light_under_the_paper_and_can_go_to_the_lit_pass() {
     assert!(lit_only.false_shadow > 3.0 * default.total);
     assert!((both.total - default.total).abs() < 0.002);
 }
+
+#[test]
+fn light_relative_texgen_keeps_six_spot_maps_free_of_rounding_acne_at_quake_scale() {
+    // oa_dm3's light 2 stands 64 units from a wall its -X face sees head-on: no depth slope,
+    // so only the offset's constant term (4 × 2^-24) separates the wall from its own map.
+    // Measured: eye-linear planes 4.73% of its receivers falsely shadowed, light-relative
+    // 0.064%, the cube map 0.064%. The bounds: acne on a whole wall against none.
+    let (scene, _, options) = load_scene_file("oa_dm3");
+    let mut m = Measurer::new(scene, &options);
+    let six = [
+        "technique=shadow_map",
+        "plan.omni_cube=false",
+        "lighting.only=2",
+    ];
+    let error = |m: &mut Measurer, texgen: &str| {
+        let mut sets = six.to_vec();
+        sets.push(texgen);
+        let o = options_with(&sets);
+        m.measure(&o).light(2).rates().total
+    };
+    let eye = error(&mut m, "shadow_map.texgen=eye_linear");
+    let light = error(&mut m, "shadow_map.texgen=light");
+    println!(
+        "six spots, light 2: eye-linear {}, light-relative {}",
+        pct(eye),
+        pct(light)
+    );
+    assert!(eye > 0.02, "the eye-linear planes' acne: {}", pct(eye));
+    assert!(light < 0.002, "light-relative planes: {}", pct(light));
+}
