@@ -3,6 +3,13 @@
 use crate::geometry::Aabb;
 use glam::{Mat4, Vec3, Vec4};
 
+/// The four side planes and the near plane `(n, d)`, `n·p + d ≥ 0` inside, of a world-to-clip
+/// matrix (Gribb and Hartmann's row sums, not normalised; no far plane).
+pub fn sides_and_near(m: &Mat4) -> [Vec4; 5] {
+    let (r0, r1, r2, r3) = (m.row(0), m.row(1), m.row(2), m.row(3));
+    [r3 + r0, r3 - r0, r3 + r1, r3 - r1, r3 + r2]
+}
+
 /// Planes `(n, d)` with `n·p + d ≥ 0` inside. An infinite projection has no far plane, so only
 /// the near and four side planes are kept.
 #[derive(Debug, Clone, PartialEq)]

@@ -1172,6 +1172,24 @@ impl<'a> FrameRun<'a> {
         Ok(ControlFlow::Continue(stencil_image))
     }
 
+    /// Light `lp`'s stencil as it stands, when the request asks for it (`wraps`: its counts
+    /// wrapped rather than saturated).
+    fn requested_stencil(&self, lp: &LightPlan, wraps: bool) -> Option<StencilImage> {
+        let gl = self.ctx.gl;
+        (self.request.stencil_of == Some(lp.light)).then(|| {
+            let (w, h) = (self.target.width, self.target.height);
+            let values = debug::read_stencil(gl, self.target.fbo, w, h);
+            self.target.bind(gl);
+            StencilImage {
+                light: lp.light,
+                width: w,
+                height: h,
+                values,
+                wraps,
+            }
+        })
+    }
+
     /// A hybrid light (Chan & Durand): its computation mask marked from its maps, its volumes
     /// counted where the mask lets them, then one lit pass where the map decides or the count
     /// is zero (`passes::hybrid`). Returns its stencil (mask bit and counts) when the request
@@ -1193,7 +1211,7 @@ impl<'a> FrameRun<'a> {
         self.timer
             .begin(gl, PassId::light(lp.light, Stage::Classify));
         if masked {
-            passes::hybrid::clear(gl);
+            passes::lit::clear_marks(gl);
             mark(self, false);
         }
         self.timer
@@ -1211,17 +1229,7 @@ impl<'a> FrameRun<'a> {
         go_on!(self.step(StepKind::ComputationMask, Some(lp), None, |_| {
             debug::stencil_image(&debug::read_stencil(gl, fbo, w, h), w, h, true)
         }));
-        let stencil = (self.request.stencil_of == Some(lp.light)).then(|| {
-            let values = debug::read_stencil(gl, fbo, w, h);
-            self.target.bind(gl);
-            StencilImage {
-                light: lp.light,
-                width: w,
-                height: h,
-                values,
-                wraps: true,
-            }
-        });
+        let stencil = self.requested_stencil(lp, true);
         self.timer.begin(gl, PassId::light(lp.light, Stage::Lit));
         draw_maps(
             &self.ctx,
@@ -1259,17 +1267,7 @@ impl<'a> FrameRun<'a> {
         go_on!(self.step(StepKind::Stencil, Some(lp), None, |_| {
             debug::stencil_image(&read(), w, h, wraps)
         }));
-        let stencil = (self.request.stencil_of == Some(lp.light)).then(|| {
-            let values = read();
-            self.target.bind(gl);
-            StencilImage {
-                light: lp.light,
-                width: w,
-                height: h,
-                values,
-                wraps,
-            }
-        });
+        let stencil = self.requested_stencil(lp, wraps);
         self.timer.begin(gl, PassId::light(lp.light, Stage::Lit));
         let shadow = LitShadow::Stencil { test: !fill };
         match self.fixed {
@@ -1358,7 +1356,7 @@ impl<'a> FrameRun<'a> {
             }
             match self.volumes_of(lp) {
                 Some(v) if lp.technique == Technique::Hybrid => {
-                    let (stencil, fragments) = self.hybrid_mask(pi, maps, &v);
+                    let (stencil, fragments) = self.hybrid_mask(pi, maps, &v, mtarget);
                     set_scissor(gl, None);
                     let values = mtarget.read(gl);
                     hybrid_stats.push(hybrid_stats_of(lp.light, &values, &stencil, fragments));
@@ -1417,6 +1415,7 @@ impl<'a> FrameRun<'a> {
         pi: usize,
         maps: &[ViewMap],
         v: &LightVolumes<'_>,
+        mtarget: &MaskTarget,
     ) -> (Vec<u8>, (Option<u64>, Option<u64>)) {
         let gl = self.ctx.gl;
         let lp = &self.ctx.plan.lights[pi];
@@ -1434,7 +1433,7 @@ impl<'a> FrameRun<'a> {
         let volume = &self.programs.volume;
         let fragments;
         if masked {
-            passes::hybrid::clear(gl);
+            passes::lit::clear_marks(gl);
             pass(MapPass::Mark { overwrite: false });
             fragments = (
                 passes::hybrid::volume_fragments(&self.ctx, volume, v, true),
@@ -1448,11 +1447,7 @@ impl<'a> FrameRun<'a> {
             pass(MapPass::Mark { overwrite: true });
         }
         pass(MapPass::Mask);
-        let (mtarget, w, h) = match self.measure_targets {
-            Some((_, m)) => (m, m.width, m.height),
-            None => unreachable!("hybrid masks are drawn into the measure targets"),
-        };
-        let stencil = debug::read_stencil(gl, mtarget.fbo, w, h);
+        let stencil = debug::read_stencil(gl, mtarget.fbo, mtarget.width, mtarget.height);
         mtarget.bind(gl);
         (stencil, fragments)
     }

@@ -85,9 +85,7 @@ impl ShadowView {
     /// World-space planes `(n, d)` (n·p + d ≥ 0 inside) of the frustum's four sides and its near
     /// plane, for clipping the lit pass (gl_ClipDistance).
     pub fn clip_planes(&self) -> [Vec4; 5] {
-        let m = self.view_proj();
-        let (r0, r1, r2, r3) = (m.row(0), m.row(1), m.row(2), m.row(3));
-        [r3 + r0, r3 - r0, r3 + r1, r3 - r1, r3 + r2]
+        crate::geometry::frustum::sides_and_near(&self.view_proj())
     }
 }
 

@@ -14,6 +14,7 @@
 //! compare needs: a trapezoidal map scales each ray's depths by its own positive constant.
 
 use crate::geometry::Aabb;
+use crate::geometry::frustum::sides_and_near;
 use crate::options::{PsmOptions, Warp};
 use crate::scene::Camera;
 use glam::{Mat4, Vec2, Vec3, Vec4, Vec4Swizzles};
@@ -104,13 +105,6 @@ pub fn warp(kind: Warp, input: &WarpInput, o: &PsmOptions) -> Result<Warped, Deg
     }
 }
 
-/// World planes `(n, d)`, inside where `n·p + d ≥ 0`, of a view-projection's sides and near
-/// plane (its far plane is left out: the camera's is at infinity).
-fn side_planes(m: &Mat4) -> [Vec4; 5] {
-    let (r0, r1, r2, r3) = (m.row(0), m.row(1), m.row(2), m.row(3));
-    [r3 + r0, r3 - r0, r3 + r1, r3 - r1, r3 + r2]
-}
-
 /// The camera's world → clip matrix with a finite far plane (the focus is finite anyway).
 fn camera_matrix(c: &Camera, aspect: f32) -> Mat4 {
     Mat4::perspective_infinite_rh(c.fov_y(aspect), aspect, c.near) * c.view()
@@ -119,8 +113,10 @@ fn camera_matrix(c: &Camera, aspect: f32) -> Mat4 {
 /// The focus: each receiver box (or, without fitting, the light's range) clipped to the camera's
 /// frustum and the standard view's (and to `extra`), as the vertices of the clipped polyhedra.
 fn focus_points(input: &WarpInput, fit: bool, extra: Option<Vec4>) -> Vec<Vec3> {
-    let mut planes: Vec<Vec4> = side_planes(&camera_matrix(input.camera, input.aspect)).to_vec();
-    planes.extend(side_planes(&input.standard));
+    // No far planes: the camera's is at infinity, and receivers beyond the light's fitted far
+    // plane are still looked up.
+    let mut planes: Vec<Vec4> = sides_and_near(&camera_matrix(input.camera, input.aspect)).to_vec();
+    planes.extend(sides_and_near(&input.standard));
     planes.extend(extra);
     let boxes: &[Aabb] = if fit {
         input.receivers

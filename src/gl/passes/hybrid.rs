@@ -56,16 +56,6 @@ pub fn mark(
     unsafe { gl.color_mask(true, true, true, true) };
 }
 
-/// Clears the stencil within the scissor, before the marking pass.
-pub fn clear(gl: &glow::Context) {
-    // SAFETY: a clear of the bound target's stencil.
-    unsafe {
-        gl.stencil_mask(0xff);
-        gl.clear_stencil(0);
-        gl.clear(glow::STENCIL_BUFFER_BIT);
-    }
-}
-
 /// Samples that pass the tests `draw` sets up (GL_SAMPLES_PASSED); None where the GL has no
 /// such query (OpenGL ES has only "any samples passed").
 pub fn samples_passed(gl: &glow::Context, draw: impl FnOnce()) -> Option<u64> {
