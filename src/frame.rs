@@ -47,6 +47,14 @@ pub struct CacheStats {
     pub depth_reused: bool,
     pub volume_parts_built: usize,
     pub volume_parts_reused: usize,
+    /// Shadow-volume caster groups (the world's, each model's) built for this frame: all of
+    /// them for a new scene, then only those of models whose vertices moved (animation).
+    pub caster_groups_built: usize,
+    /// Models whose vertices were uploaded again before the frame (animation).
+    pub models_uploaded: usize,
+    /// Caster groups whose GPU extrusion meshes were built and uploaded for this frame (their
+    /// first use, or their model's new pose).
+    pub extrusions_uploaded: usize,
 }
 
 #[derive(Debug, Clone)]

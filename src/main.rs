@@ -31,6 +31,8 @@ enum Command {
     Tune(commands::tune::Args),
     /// Check maps of a data set: both techniques, planner on and off, against the reference.
     Check(commands::check::Args),
+    /// Record a flythrough: a camera walking through a scene's map, as a path file.
+    Flythrough(commands::flythrough::Args),
     /// Regenerate the paper's figures and claims beside our measurements (index.html + .md).
     Reproduce(commands::reproduce::Args),
     /// Open the walkthrough viewer in a window (F1 for keys).
@@ -46,6 +48,7 @@ fn main() {
     let result: Result<()> = match cli.command {
         Command::Info(a) => commands::info::run(&cli.common, &a),
         Command::Render(a) => commands::render::run(&cli.common, &a),
+        Command::Flythrough(a) => commands::flythrough::run(&cli.common, &a),
         Command::Options(a) => commands::options::run(&a),
         Command::Inspect(a) => commands::inspect::run(&cli.common, &a),
         Command::Bench(a) => commands::bench::run(&cli.common, &a),

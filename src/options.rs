@@ -597,6 +597,20 @@ option_enum! {
 }
 
 option_enum! {
+    /// Whose shadow volumes a vertex shader extrudes from a mesh built once per caster and pose
+    /// (`shaders/volume_gpu.vert`), instead of the CPU building them per light.
+    pub enum GpuExtrusion {
+        /// None: every volume is built on the CPU (the paper's frame).
+        None = "none",
+        /// Models' (players and other MD3s): an animated model's volumes would be built anew on
+        /// the CPU for every frame and light; the world's stay on the CPU, cached.
+        Models = "models",
+        /// Every caster's, the world's too.
+        All = "all",
+    }
+}
+
+option_enum! {
     /// Which triangles of casters extrude shadow volumes.
     pub enum VolumeCasters {
         /// Triangles facing the light (the paper): a one-sided face seen from behind casts
@@ -976,6 +990,13 @@ define_options! {
         shading: VolumeShading = VolumeShading::Additive;
         /// Rebuild a light's volumes only when the light or a caster moved.
         caching: bool = true;
+        /// Whose volumes the GPU extrudes (with infinite extrusion and the shader pipeline;
+        /// elsewhere the CPU builds them all). Those volumes are whole caster groups, counted
+        /// depth-fail, without the planner's per-piece culling, truncation, scissors or depth
+        /// clips. Default none: on llvmpipe, where the vertex shader runs on the CPU too, the
+        /// CPU's culled, cached pieces were faster for models and the world alike along every
+        /// flythrough measured (docs/motion.md).
+        gpu_extrusion: GpuExtrusion = GpuExtrusion::None;
     }
 
     /// The GL the frame runs on.

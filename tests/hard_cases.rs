@@ -8,9 +8,12 @@
 
 mod common;
 
-use common::{Measured, Measurer, load_asset, load_scene_file, options_with, test_options};
+use common::{
+    Footprint, Measured, Measurer, differing, load_asset, load_scene_file, options_with,
+    test_options,
+};
 use glam::Vec3;
-use shadowlab::images::{Mask, MaskValue};
+use shadowlab::images::MaskValue;
 use shadowlab::options::Options;
 use shadowlab::plan::Plan;
 use shadowlab::scene::{Camera, Scene};
@@ -680,34 +683,6 @@ fn case11_lights_on_a_vertex_on_an_edge_and_inside_a_closed_caster() {
     assert!(sm.iter().all(|x| x.total_excl_boundary < 0.005), "{sm:?}");
 }
 
-fn rss_bytes() -> u64 {
-    let statm = std::fs::read_to_string("/proc/self/statm").unwrap_or_default();
-    let pages: u64 = statm
-        .split_whitespace()
-        .nth(1)
-        .and_then(|p| p.parse().ok())
-        .unwrap_or(0);
-    pages * 4096
-}
-
-/// The next GL names the driver hands out for each object type (a leak makes them run away).
-fn gl_names(gl: &glow::Context) -> [u32; 4] {
-    use glow::HasContext;
-    // SAFETY: objects created and deleted at once, only to read the names GL assigns.
-    unsafe {
-        let t = gl.create_texture().unwrap();
-        let b = gl.create_buffer().unwrap();
-        let f = gl.create_framebuffer().unwrap();
-        let v = gl.create_vertex_array().unwrap();
-        let names = [t.0.get(), b.0.get(), f.0.get(), v.0.get()];
-        gl.delete_texture(t);
-        gl.delete_buffer(b);
-        gl.delete_framebuffer(f);
-        gl.delete_vertex_array(v);
-        names
-    }
-}
-
 #[test]
 fn case10_ten_thousand_frames_of_a_moving_light_on_oa_dm1() {
     let case = "10 long run";
@@ -743,8 +718,7 @@ fn case10_ten_thousand_frames_of_a_moving_light_on_oa_dm1() {
     for _ in 0..100 {
         render(&mut m, &sm);
     }
-    let names_before = gl_names(&gl);
-    let rss_before = rss_bytes();
+    let before = Footprint::take(&gl);
     const FRAMES: usize = 10_000;
     const PERIOD: usize = 1_000;
     let start = std::time::Instant::now();
@@ -781,32 +755,11 @@ fn case10_ten_thousand_frames_of_a_moving_light_on_oa_dm1() {
             );
         }
     }
-    let names_after = gl_names(&gl);
-    let rss_after = rss_bytes();
-    let growth: Vec<i64> = names_before
-        .iter()
-        .zip(&names_after)
-        .map(|(a, b)| *b as i64 - *a as i64)
-        .collect();
+    let after = Footprint::take(&gl);
     println!(
-        "{case}: {FRAMES} frames in {elapsed:.1} s, {static_checks} static checks; GL names grew by {growth:?}; RSS {} -> {} MiB",
-        rss_before >> 20,
-        rss_after >> 20
+        "{case}: {FRAMES} frames in {elapsed:.1} s, {static_checks} static checks; GL names grew by {:?}; {}",
+        after.names_since(&before),
+        after.memory_since(&before)
     );
-    assert!(
-        growth.iter().all(|g| *g < 16),
-        "GL objects leak: {growth:?}"
-    );
-    assert!(
-        rss_after < rss_before + (32 << 20),
-        "memory grew from {rss_before} to {rss_after}"
-    );
-}
-
-fn differing(a: &Mask, b: &Mask) -> usize {
-    a.values
-        .iter()
-        .zip(&b.values)
-        .filter(|(x, y)| x != y)
-        .count()
+    after.assert_flat_since(&before);
 }

@@ -885,10 +885,10 @@ fn depth_fits_are_reused_only_for_the_same_depth() {
 /// Box A in the world and a model box (model space -5..5, -5..5, 0..10) placed at (30, 0, 20).
 fn model_scene() -> Scene {
     let mut scene = between_scene();
-    scene.models.push(ModelInstance {
-        name: "model".into(),
-        transform: Mat4::from_translation(Vec3::new(30.0, 0.0, 20.0)),
-    });
+    scene.models.push(ModelInstance::new(
+        "model",
+        Mat4::from_translation(Vec3::new(30.0, 0.0, 20.0)),
+    ));
     add(
         &mut scene,
         &cuboid(Vec3::new(-5.0, -5.0, 0.0), Vec3::new(5.0, 5.0, 10.0), 8.0),

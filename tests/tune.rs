@@ -52,6 +52,9 @@ fn the_frontier_holds_a_configuration_no_point_of_the_fixed_sweep_dominates() {
             progress: false,
             interleave: true,
             breakdown: true,
+            // The scene as loaded: these measure techniques, not motion.
+            motion: false,
+            sample_every: 1,
         },
     )
     .run_with(&all, &hidden)

@@ -174,22 +174,27 @@ fn the_viewer_drives_the_builtin_scene_and_oa_dm1_from_scripts() {
     std::fs::write(&path, poses).unwrap();
     let out = view(
         Some("assets/scenes/oa_dm1.toml"),
+        // The motion paused, so that the frames differ by technique and overlay only; then
+        // stepped on, sarge running and a light circling.
         &format!(
-            "replay {}\nset technique=shadow_map\nwait 2\nframe {}\nset technique=shadow_volume\n\
-             wait 2\nframe {}\noverlay volumes on\noverlay silhouettes on\nwait 3\nframe {}\n\
-             screenshot {}\noverlay volumes off\noverlay silhouettes off\n\
-             set estimate.budget=0.5\noverlay estimate on\nwait 30\nquit\n",
+            "play off\nreplay {}\nset technique=shadow_map\nwait 2\nframe {}\n\
+             set technique=shadow_volume\nwait 2\nframe {}\noverlay volumes on\n\
+             overlay silhouettes on\nwait 3\nframe {}\nscreenshot {}\noverlay volumes off\n\
+             overlay silhouettes off\nstep 8\nwait 2\nframe {}\nset estimate.budget=0.5\n\
+             overlay estimate on\nwait 30\nquit\n",
             path.display(),
             p("oa_dm1-frame-maps.png"),
             p("oa_dm1-frame-volumes.png"),
             p("oa_dm1-frame-volumes-shown.png"),
             p("oa_dm1-viewer-volumes.png"),
+            p("oa_dm1-frame-later.png"),
         ),
         "oa_dm1",
     );
     let sm = load(&d.join("oa_dm1-frame-maps.png"));
     let sv = load(&d.join("oa_dm1-frame-volumes.png"));
     let shown = load(&d.join("oa_dm1-frame-volumes-shown.png"));
+    let later = load(&d.join("oa_dm1-frame-later.png"));
     let total = (sm.width() * sm.height()) as usize;
     let (_, technique_px) = darker_and_differing(&sm, &sv);
     let (_, overlay_px) = darker_and_differing(&sv, &shown);
@@ -200,6 +205,10 @@ fn the_viewer_drives_the_builtin_scene_and_oa_dm1_from_scripts() {
     // (a twentieth at least: the planner's depth-pass pieces have no caps to show, only sides).
     assert!(technique_px > 0 && technique_px < total / 5);
     assert!(overlay_px > total / 20);
+    // Eight steps on (0.4 s), sarge has run and the light has moved: the frame changed.
+    let (_, motion_px) = darker_and_differing(&sv, &later);
+    println!("oa_dm1: 0.4 s of motion changes {motion_px} px");
+    assert!(motion_px > 1000, "the motion moved nothing: {motion_px} px");
     // The live error ran on the frames after `overlay estimate on` (half the frame time for
     // sampling, so that a few of the 30 frames are sampled on llvmpipe, where a frame's masks
     // cost about a frame): every light of oa_dm1's view sampled under volumes, each estimate

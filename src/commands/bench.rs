@@ -23,10 +23,19 @@ pub struct Args {
     /// light; `--set estimate.samples=0` skips it).
     #[arg(long)]
     frames: Option<usize>,
-    /// Camera path: `turn` (360° in place over 128 frames, DarkPlaces' timerefresh) or a
-    /// recorded path file (`x y z yaw pitch` per line); the scene's camera when absent.
+    /// Camera path: `turn` (360° in place over 128 frames, DarkPlaces' timerefresh), `still`
+    /// (the scene's camera) or a recorded path file (`x y z yaw pitch` per line). Default: the
+    /// scene file's `flythrough`, else still.
     #[arg(long)]
     path: Option<String>,
+    /// Hold the scene as loaded instead of playing its motion (animated players, moving
+    /// lights) along the path, one path frame per 1/20 s.
+    #[arg(long)]
+    no_motion: bool,
+    /// Sample every n-th measured frame against the sampled reference (default: 4 on a
+    /// recorded path, else 1).
+    #[arg(long)]
+    sample_every: Option<usize>,
     /// Time one configuration after another on one renderer, instead of round-robin (one frame
     /// of each configuration and baseline in turn, each on its own renderer), which keeps the
     /// ratios steady when the machine's speed drifts.
@@ -63,7 +72,7 @@ pub fn run(common: &CommonArgs, args: &Args) -> Result<()> {
         .map(|s| parse_sweep(s))
         .collect::<Result<_>>()?;
     let loaded = load(common, args.scene.as_deref())?;
-    let (scene, mut options) = (loaded.scene, loaded.options);
+    let (scene, mut options) = (loaded.scene.clone(), loaded.options.clone());
     // Sweeping one technique's options without choosing it would measure nothing: pick it.
     if options.technique == Technique::None && !sweeps.iter().any(|(k, _)| k == "technique") {
         let implied = Technique::ALL.iter().copied().find(|t| {
@@ -77,20 +86,33 @@ pub fn run(common: &CommonArgs, args: &Args) -> Result<()> {
         }
     }
     let configs = sweep_configs(&options, &sweeps)?;
-    let keys = camera_path(&scene.camera, args.path.as_deref())?;
+    let flythrough = loaded.report.flythrough.clone();
+    let path = match args.path.as_deref() {
+        Some("still") => None,
+        Some(p) => Some(p.to_string()),
+        None => flythrough.map(|f| f.display().to_string()),
+    };
+    let keys = camera_path(&scene.camera, path.as_deref())?;
+    let recorded = path.as_deref().is_some_and(|p| p != "turn");
     let frames = args
         .frames
-        .unwrap_or(if args.path.is_some() { keys.len() } else { 10 });
+        .unwrap_or(if path.is_some() { keys.len() } else { 10 });
     let (_ctx, mut renderer) = start_gl(&options)?;
     renderer.load_scene(&scene)?;
     eprintln!(
-        "bench: {} configuration(s) on {} ({} triangles, {} lights), {} warm-up + {} measured frames each, {}",
+        "bench: {} configuration(s) on {} ({} triangles, {} lights), {} warm-up + {} measured frames each along {}{}, {}",
         configs.len(),
         scene.name,
         scene.triangle_count(),
         scene.lights.len(),
         args.warmup,
         frames,
+        path.as_deref().unwrap_or("the still camera"),
+        if args.no_motion || scene.motion.is_still() {
+            ""
+        } else {
+            " with the scene moving"
+        },
         renderer.caps.renderer
     );
     let settings = BenchSettings {
@@ -100,10 +122,16 @@ pub fn run(common: &CommonArgs, args: &Args) -> Result<()> {
         progress: true,
         interleave: !args.sequential,
         breakdown: true,
+        motion: !args.no_motion,
+        sample_every: args.sample_every.unwrap_or(if recorded { 4 } else { 1 }),
     };
     let rows = Bench::new(&mut renderer, &scene, settings).run(&configs)?;
     println!("{}", table::markdown(&rows));
-    if rows.iter().any(|r| r.sampled.is_some()) {
+    // Frame by frame only where it fits on a screen; the JSON holds every frame.
+    if rows
+        .iter()
+        .any(|r| r.sampled.as_ref().is_some_and(|p| p.frames.len() <= 32))
+    {
         println!("{}", table::path_error_table(&rows).to_markdown());
     }
     if let Some(json) = &args.json {

@@ -2,6 +2,7 @@
 
 pub mod bench;
 pub mod check;
+pub mod flythrough;
 pub mod info;
 pub mod inspect;
 pub mod options;

@@ -94,6 +94,16 @@ pub struct Args {
     /// the sampled reference (`estimate.samples` pixels traced; JSON on stdout).
     #[arg(long)]
     stats: bool,
+    /// Render the scene's motion (animated players, moving lights) at this many seconds
+    /// (default: 0, or the time of `--frame` on a path).
+    #[arg(long)]
+    time: Option<f64>,
+    /// A camera path file (`x y z yaw pitch` per line): render its frame `--frame`.
+    #[arg(long, requires = "frame")]
+    path: Option<PathBuf>,
+    /// The frame of `--path` to render, posed at its time (frame / 20 s).
+    #[arg(long, requires = "path")]
+    frame: Option<usize>,
 }
 
 fn parse_probe(s: &str) -> Result<(u32, u32)> {
@@ -168,10 +178,30 @@ fn probe(scene: &Scene, frame: &Frame, (x, y): (u32, u32)) -> Result<()> {
 
 pub fn run(common: &CommonArgs, args: &Args) -> Result<()> {
     let super::Loaded {
-        scene,
+        mut scene,
         options,
         report,
     } = load(common, args.scene.as_deref())?;
+    if let (Some(path), Some(frame)) = (&args.path, args.frame) {
+        let keys = shadowlab::scene::path::read(path)?;
+        let key = keys.get(frame).with_context(|| {
+            format!(
+                "{} has {} frames, not {}",
+                path.display(),
+                keys.len(),
+                frame + 1
+            )
+        })?;
+        scene.camera = key.apply(&scene.camera);
+    }
+    let time = args
+        .time
+        .unwrap_or_else(|| args.frame.unwrap_or(0) as f64 / shadowlab::scene::path::FRAME_RATE_HZ);
+    anyhow::ensure!(
+        time.is_finite() && time >= 0.0,
+        "--time must be a finite number of seconds >= 0"
+    );
+    scene.pose_at(time);
     // `ctx` is borrowed mutably only to show the frame in a window.
     #[cfg_attr(not(feature = "window"), allow(unused_mut))]
     let (mut ctx, mut renderer) = start_gl(&options)?;

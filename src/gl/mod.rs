@@ -6,6 +6,7 @@ pub mod debug;
 pub mod depth_bounds_ext;
 pub mod depth_reduce;
 pub mod egl;
+pub mod extrusion;
 pub mod fixed;
 pub mod legacy;
 pub mod osmesa;

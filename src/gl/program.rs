@@ -38,6 +38,7 @@ pub mod sources {
     pub const DEPTH_VERT: &str = include_str!("../../shaders/depth.vert");
     pub const DEPTH_FRAG: &str = include_str!("../../shaders/depth.frag");
     pub const VOLUME_VERT: &str = include_str!("../../shaders/volume.vert");
+    pub const VOLUME_GPU_VERT: &str = include_str!("../../shaders/volume_gpu.vert");
     pub const VOLUME_FRAG: &str = include_str!("../../shaders/volume.frag");
     pub const FULLSCREEN_VERT: &str = include_str!("../../shaders/fullscreen.vert");
     pub const FILL_FRAG: &str = include_str!("../../shaders/fill.frag");

@@ -9,6 +9,7 @@
 use super::caps::{self, Caps};
 use super::debug;
 use super::depth_reduce::DepthReducer;
+use super::extrusion::{ExtrudedDraw, Extrusions};
 use super::fixed::{self, FixedFunction};
 use super::legacy::Legacy;
 use super::passes::lit::{LitShadow, ShadowBinding};
@@ -216,7 +217,7 @@ struct Programs {
     depth: Program,
     /// The depth pass storing another matrix's depth than it draws with (trapezoidal maps).
     depth_warp: Program,
-    volume: Program,
+    volume: passes::stencil::VolumePrograms,
     fill: Program,
     /// The depth's 4×4 block maxima for the planner.
     depth_reduce: Program,
@@ -246,13 +247,22 @@ impl Programs {
                 Some(sources::DEPTH_FRAG),
                 &["WARP_DEPTH"],
             )?,
-            volume: Program::new(
-                gl,
-                "volume",
-                sources::VOLUME_VERT,
-                Some(sources::VOLUME_FRAG),
-                &[],
-            )?,
+            volume: passes::stencil::VolumePrograms {
+                built: Program::new(
+                    gl,
+                    "volume",
+                    sources::VOLUME_VERT,
+                    Some(sources::VOLUME_FRAG),
+                    &[],
+                )?,
+                extruded: Program::new(
+                    gl,
+                    "volume_gpu",
+                    sources::VOLUME_GPU_VERT,
+                    Some(sources::VOLUME_FRAG),
+                    &[],
+                )?,
+            },
             fill: Program::new(
                 gl,
                 "fill",
@@ -309,7 +319,8 @@ impl Programs {
             &self.gbuffer,
             &self.depth,
             &self.depth_warp,
-            &self.volume,
+            &self.volume.built,
+            &self.volume.extruded,
             &self.fill,
             &self.depth_reduce,
             &self.debug_volume,
@@ -333,6 +344,8 @@ pub struct Renderer {
     shadow_maps: ShadowMaps,
     /// Every light's shadow-volume buffers.
     volume_buffers: VolumeBuffers,
+    /// Caster groups' meshes for volumes the GPU extrudes.
+    extrusions: Extrusions,
     /// Created on the first frame that asks for masks.
     measure_targets: Option<(GBufferTarget, MaskTarget)>,
     /// Core profile draws need a bound VAO even without attributes (full-screen triangles).
@@ -390,6 +403,7 @@ impl Renderer {
             timer,
             shadow_maps: ShadowMaps::default(),
             volume_buffers: VolumeBuffers::default(),
+            extrusions: Extrusions::default(),
             measure_targets: None,
             empty_vao,
             depth_reducer: None,
@@ -435,6 +449,7 @@ impl Renderer {
         // Cached maps and volumes belong to the old scene.
         self.shadow_maps.forget();
         self.volume_buffers.delete(&self.gl);
+        self.extrusions.delete(&self.gl);
         self.planner.forget();
         Ok(())
     }
@@ -505,6 +520,7 @@ impl Renderer {
         let frame_only = request.frame_only;
         let mut frame = self.execute(scene, &plan, options, request)?;
         frame.fallbacks = fallbacks;
+        frame.cache.caster_groups_built = self.planner.take_groups_rebuilt();
         // Frame-only timing has no per-light passes to learn from.
         if !frame_only {
             self.planner.record_costs(&plan, &frame.passes);
@@ -573,6 +589,12 @@ impl Renderer {
         let gl: &glow::Context = &gl_arc;
         // Compile what this frame needs before borrowing the programs for the passes.
         let variants = self.lit_variants(gl, plan, options, request)?;
+        // Animated models' vertices go up before anything draws them.
+        let models_uploaded = self
+            .gpu
+            .as_mut()
+            .ok_or(RenderError::NoScene)?
+            .sync_models(gl, scene);
         let gpu = self.gpu.as_ref().ok_or(RenderError::NoScene)?;
         self.timer.start_frame(!request.frame_only);
         self.last_maps.clear();
@@ -593,6 +615,8 @@ impl Renderer {
             shadow_maps: &mut self.shadow_maps,
             planner: &mut self.planner,
             volume_buffers: &mut self.volume_buffers,
+            extrusions: &mut self.extrusions,
+            extruded: HashMap::new(),
             depth_reducer: &mut self.depth_reducer,
             last_maps: &mut self.last_maps,
             empty_vao: self.empty_vao,
@@ -602,7 +626,10 @@ impl Renderer {
                 stop: request.stop_after,
                 steps: Vec::new(),
             },
-            cache: CacheStats::default(),
+            cache: CacheStats {
+                models_uploaded,
+                ..CacheStats::default()
+            },
             start: Instant::now(),
             volume_stats: Vec::new(),
             fixed: self
@@ -774,6 +801,9 @@ struct FrameRun<'a> {
     shadow_maps: &'a mut ShadowMaps,
     planner: &'a mut Planner,
     volume_buffers: &'a mut VolumeBuffers,
+    extrusions: &'a mut Extrusions,
+    /// Per light, the groups the GPU extrudes this frame.
+    extruded: HashMap<usize, Vec<ExtrudedDraw>>,
     depth_reducer: &'a mut Option<DepthReducer>,
     last_maps: &'a mut Vec<LastMap>,
     empty_vao: glow::VertexArray,
@@ -1086,6 +1116,7 @@ impl<'a> FrameRun<'a> {
             self.cache.volume_parts_built += v.stats.parts_built;
             self.cache.volume_parts_reused += v.stats.parts_reused;
             self.volume_stats.push(v.stats);
+            self.extruded_draws(lp)?;
         }
         // The per-frame decisions on the pieces (receivers, rectangles, merges, depth clips)
         // and the uploads, less the builds timed above.
@@ -1095,13 +1126,41 @@ impl<'a> FrameRun<'a> {
         Ok(())
     }
 
+    /// The light's groups the GPU extrudes: their meshes uploaded where their pose changed, and
+    /// their draws for the stencil pass.
+    fn extruded_draws(&mut self, lp: &LightPlan) -> Result<(), RenderError> {
+        if lp.extruded.is_empty() {
+            return Ok(());
+        }
+        let (gl, scene) = (self.ctx.gl, self.ctx.scene);
+        let groups = self.planner.casters(scene);
+        let double = self.ctx.options.shadow_volume.casters == crate::options::VolumeCasters::Both;
+        let light = scene.lights[lp.light].position;
+        let mut draws = Vec::with_capacity(lp.extruded.len());
+        for &(g, counting) in &lp.extruded {
+            let group = &groups.groups[g];
+            if self
+                .extrusions
+                .ensure(gl, g, group, double)
+                .map_err(RenderError::Gl)?
+            {
+                self.cache.extrusions_uploaded += 1;
+            }
+            let model = crate::shadow::volume::group_transform(scene, group.owner);
+            draws.extend(self.extrusions.draw_of(g, model, light, counting));
+        }
+        self.extruded.insert(lp.light, draws);
+        Ok(())
+    }
+
     /// The light's volume draws with their buffers, when it has volumes this frame.
     fn volumes_of(&self, lp: &LightPlan) -> Option<LightVolumes<'_>> {
         if !lp.technique.uses_volumes() {
             return None;
         }
         let draws = self.planner.last_volume_draws(lp.light)?;
-        self.volume_buffers.with(draws)
+        let extruded = self.extruded.get(&lp.light).map_or(&[][..], Vec::as_slice);
+        self.volume_buffers.with(draws, extruded)
     }
 
     /// The shadow-map bindings of light `pi`'s lit passes: per view, whether it is a cube,
@@ -1436,13 +1495,13 @@ impl<'a> FrameRun<'a> {
             passes::lit::clear_marks(gl);
             pass(MapPass::Mark { overwrite: false });
             fragments = (
-                passes::hybrid::volume_fragments(&self.ctx, volume, v, true),
-                passes::hybrid::volume_fragments(&self.ctx, volume, v, false),
+                passes::hybrid::volume_fragments(&self.ctx, volume, v, (true, lp.scissor)),
+                passes::hybrid::volume_fragments(&self.ctx, volume, v, (false, lp.scissor)),
             );
             passes::stencil::draw(&self.ctx, volume, v, lp.scissor, true);
         } else {
             passes::stencil::draw(&self.ctx, volume, v, lp.scissor, false);
-            let all = passes::hybrid::volume_fragments(&self.ctx, volume, v, false);
+            let all = passes::hybrid::volume_fragments(&self.ctx, volume, v, (false, lp.scissor));
             fragments = (all, all);
             pass(MapPass::Mark { overwrite: true });
         }
@@ -1636,6 +1695,7 @@ impl Drop for Renderer {
         self.target.delete(gl);
         self.shadow_maps.delete(gl);
         self.volume_buffers.delete(gl);
+        self.extrusions.delete(gl);
         if let Some((g, m)) = self.measure_targets.take() {
             g.delete(gl);
             m.delete(gl);

@@ -29,6 +29,25 @@ pub struct GpuScene {
     /// First index of each surface (by scene surface index) in the GPU index buffer.
     gpu_first: Vec<u32>,
     pub index_count: usize,
+    /// Per model: the run of vertices its surfaces use and the pose uploaded there.
+    models: Vec<(std::ops::Range<usize>, u64)>,
+}
+
+/// The run of scene vertices model `m`'s surfaces use (empty without surfaces).
+fn model_vertex_run(scene: &Scene, m: usize) -> std::ops::Range<usize> {
+    let mut run: Option<(usize, usize)> = None;
+    for s in scene
+        .surfaces
+        .iter()
+        .filter(|s| s.owner == SurfaceOwner::Model(m))
+    {
+        let range = s.first_index as usize..(s.first_index + s.index_count) as usize;
+        for &v in &scene.indices[range] {
+            let v = v as usize;
+            run = Some(run.map_or((v, v + 1), |(a, b)| (a.min(v), b.max(v + 1))));
+        }
+    }
+    run.map_or(0..0, |(a, b)| a..b)
 }
 
 fn state_key(scene: &Scene, s: usize) -> (u8, usize, usize, usize, u8) {
@@ -168,8 +187,41 @@ impl GpuScene {
                 order,
                 gpu_first,
                 index_count: indices.len(),
+                models: (0..scene.models.len())
+                    .map(|m| (model_vertex_run(scene, m), scene.models[m].pose))
+                    .collect(),
             })
         }
+    }
+
+    /// Uploads the vertices of models whose pose changed since they were uploaded (animation);
+    /// returns how many models were uploaded.
+    pub fn sync_models(&mut self, gl: &glow::Context, scene: &Scene) -> usize {
+        let mut uploaded = 0;
+        for (m, (run, pose)) in self.models.iter_mut().enumerate() {
+            let Some(model) = scene.models.get(m) else {
+                continue;
+            };
+            if model.pose == *pose || run.start == run.end || run.end > scene.vertices.len() {
+                continue;
+            }
+            let data = &scene.vertices[run.clone()];
+            // SAFETY: Vertex is plain data (see `Plain`); the run lies inside the buffer, which
+            // holds every scene vertex.
+            unsafe {
+                let bytes = std::slice::from_raw_parts(
+                    data.as_ptr() as *const u8,
+                    std::mem::size_of_val(data),
+                );
+                gl.bind_buffer(glow::ARRAY_BUFFER, Some(self.vbo));
+                let offset = (run.start * std::mem::size_of::<Vertex>()) as i32;
+                gl.buffer_sub_data_u8_slice(glow::ARRAY_BUFFER, offset, bytes);
+                gl.bind_buffer(glow::ARRAY_BUFFER, None);
+            }
+            *pose = model.pose;
+            uploaded += 1;
+        }
+        uploaded
     }
 
     /// The listed surfaces, merged into as few draws as the state order allows.

@@ -23,6 +23,16 @@ pub struct LightVolumes<'a> {
     pub ebo: glow::Buffer,
     pub draws: &'a [VolumeDraw],
     pub parts: &'a [PartRange],
+    /// Groups the GPU extrudes (`shadow_volume.gpu_extrusion`).
+    pub extruded: &'a [crate::gl::extrusion::ExtrudedDraw],
+}
+
+impl LightVolumes<'_> {
+    /// Whether anything is counted `counting`.
+    pub fn counts(&self, counting: crate::shadow::volume::Counting) -> bool {
+        self.draws.iter().any(|d| d.counting == counting)
+            || self.extruded.iter().any(|d| d.counting == counting)
+    }
 }
 
 /// Every light's volume buffers.
@@ -75,13 +85,18 @@ impl VolumeBuffers {
     }
 
     /// The light's draws with its vertex array, if its buffers exist.
-    pub fn with<'a>(&self, draws: &'a LightVolumeDraws) -> Option<LightVolumes<'a>> {
+    pub fn with<'a>(
+        &self,
+        draws: &'a LightVolumeDraws,
+        extruded: &'a [crate::gl::extrusion::ExtrudedDraw],
+    ) -> Option<LightVolumes<'a>> {
         self.lights.get(&draws.light).map(|b| LightVolumes {
             vao: b.vao,
             vbo: b.vbo,
             ebo: b.ebo,
             draws: &draws.draws,
             parts: &draws.parts,
+            extruded,
         })
     }
 

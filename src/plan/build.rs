@@ -6,8 +6,8 @@ use super::scissor::{self, Scissor};
 use super::{CameraSetup, LightPlan, PartTriangles, Plan, PlanStats, VolumePart, cull};
 use crate::geometry::{Aabb, Frustum};
 use crate::options::{
-    CountingMode, OmniMode, Options, Outside, ShadowMapOptions, ShadowVolumeOptions, StencilPasses,
-    Technique, VolumeCasters, VolumeProjection, Warp,
+    CountingMode, GpuExtrusion, OmniMode, Options, Outside, Pipeline, ShadowMapOptions,
+    ShadowVolumeOptions, StencilPasses, Technique, VolumeCasters, VolumeProjection, Warp,
 };
 use crate::scene::{Camera, Light, LightKind, Scene, SurfaceOwner};
 use crate::shadow::views::{ViewKind, shadow_views};
@@ -340,6 +340,7 @@ impl<'a> FrameFacts<'a> {
             order,
             views: Vec::new(),
             volumes: Vec::new(),
+            extruded: Vec::new(),
             receivers,
             view_receivers: Vec::new(),
             view_casters: Vec::new(),
@@ -612,17 +613,20 @@ impl FrameFacts<'_> {
     }
 
     /// What a view's map depends on (a map drawn with the same key is reused): the light and
-    /// map options, the view, the casters drawn and where the moving ones stand.
+    /// map options, the view, the casters drawn and where the moving ones stand, in which pose.
     fn map_key(
         &self,
         light_key: u64,
         view: &crate::shadow::views::ShadowView,
         drawn: &[u32],
     ) -> u64 {
-        let moving: Vec<[u32; 16]> = drawn
+        let moving: Vec<([u32; 16], u64)> = drawn
             .iter()
             .filter_map(|&c| match self.scene.surfaces[c as usize].owner {
-                SurfaceOwner::Model(m) => Some(mat_bits(&self.scene.models[m].transform)),
+                SurfaceOwner::Model(m) => {
+                    let model = &self.scene.models[m];
+                    Some((mat_bits(&model.transform), model.pose))
+                }
                 SurfaceOwner::World => None,
             })
             .collect();
@@ -710,7 +714,43 @@ impl FrameFacts<'_> {
         if on && p.cull_lights && plan.volumes.is_empty() {
             return Some("no caster whose shadow reaches the view");
         }
+        self.hand_to_gpu(plan);
         None
+    }
+
+    /// Moves the parts of groups the GPU extrudes (`shadow_volume.gpu_extrusion`) out of the
+    /// CPU's list: each such group is drawn whole, depth-fail (its pieces the planner culled
+    /// are drawn too, and no per-piece test says depth-pass is safe for them).
+    fn hand_to_gpu(&self, plan: &mut LightPlan) {
+        let o = &self.options;
+        let gpu = |owner: SurfaceOwner| match o.shadow_volume.gpu_extrusion {
+            GpuExtrusion::None => false,
+            GpuExtrusion::Models => matches!(owner, SurfaceOwner::Model(_)),
+            GpuExtrusion::All => true,
+        };
+        // The shader extrudes to infinity only, and needs the shader pipeline.
+        if o.shadow_volume.extrusion != volume::Extrusion::Infinite
+            || o.gl.pipeline == Pipeline::FixedFunction
+        {
+            return;
+        }
+        let owner_of = |group: usize| {
+            self.pieces
+                .iter()
+                .find(|(g, ..)| *g == group)
+                .map(|(_, _, _, g)| g.owner)
+        };
+        let mut kept = Vec::with_capacity(plan.volumes.len());
+        for part in std::mem::take(&mut plan.volumes) {
+            if !owner_of(part.group).is_some_and(gpu) {
+                kept.push(part);
+                continue;
+            }
+            if !plan.extruded.iter().any(|(g, _)| *g == part.group) {
+                plan.extruded.push((part.group, Counting::ZFail));
+            }
+        }
+        plan.volumes = kept;
     }
 
     /// How a piece's volume is counted. The planner turns depth-fail into a per-piece choice

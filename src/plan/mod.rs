@@ -126,8 +126,11 @@ pub struct LightPlan {
     pub order: usize,
     /// Shadow-map views (shadow mapping only).
     pub views: Vec<ShadowView>,
-    /// Volume parts (shadow volumes only).
+    /// Volume parts (shadow volumes only) the CPU builds.
     pub volumes: Vec<VolumePart>,
+    /// Caster groups whose volumes the GPU extrudes (`shadow_volume.gpu_extrusion`), with
+    /// their counting.
+    pub extruded: Vec<(usize, Counting)>,
     /// Surfaces the lit pass draws: visible receivers the light can reach.
     pub receivers: Vec<u32>,
     /// Per shadow-map view, the receivers its lit pass draws (an omni light's six spots: those

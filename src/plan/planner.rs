@@ -20,14 +20,14 @@ use std::sync::Arc;
 
 /// Everything the base pass's depth is drawn from, so that a frame with the same as the last
 /// one has the same depth without reading it back (`plan.reuse_depth`): the camera (view,
-/// projection, size), which surfaces are drawn, where the models stand, the depth format and
-/// the form it is read in. Materials, textures and geometry are the loaded scene's, which a
+/// projection, size), which surfaces are drawn, where the models stand and their poses, the
+/// depth format and the form it is read in. Materials, textures and geometry are the loaded scene's, which a
 /// new scene replaces together with the depth kept ([`Planner::forget`]).
 #[derive(Debug, Clone, PartialEq)]
 struct DepthInputs {
     camera: CameraSetup,
     visible: Vec<bool>,
-    models: Vec<glam::Mat4>,
+    models: Vec<(glam::Mat4, u64)>,
     float_depth: bool,
     reduced: bool,
 }
@@ -69,6 +69,8 @@ pub struct Planner {
     casters: Option<(u64, Arc<CasterGroups>)>,
     volumes: VolumePlanner,
     depth: DepthMemory,
+    /// Caster groups built since [`Planner::take_groups_rebuilt`].
+    groups_rebuilt: usize,
 }
 
 impl Planner {
@@ -93,16 +95,32 @@ impl Planner {
         self.memory.record_errors(samples, &self.ran, options);
     }
 
-    /// The scene's caster groups, built again only when its surfaces changed.
+    /// The scene's caster groups, built again only when its surfaces changed; a model whose
+    /// pose changed (its vertices moved) has its own group built again, the rest are kept.
     pub fn casters(&mut self, scene: &Scene) -> Arc<CasterGroups> {
         match &self.casters {
-            Some((revision, groups)) if *revision == scene.revision() => groups.clone(),
+            Some((revision, groups)) if *revision == scene.revision() => {
+                if groups.posed_as(scene) {
+                    return groups.clone();
+                }
+                let (groups, rebuilt) = groups.reposed(scene);
+                self.groups_rebuilt += rebuilt;
+                let groups = Arc::new(groups);
+                self.casters = Some((scene.revision(), groups.clone()));
+                groups
+            }
             _ => {
                 let groups = Arc::new(CasterGroups::build(scene));
+                self.groups_rebuilt += groups.groups.len();
                 self.casters = Some((scene.revision(), groups.clone()));
                 groups
             }
         }
+    }
+
+    /// Caster groups built since the last call (the frame's stats).
+    pub fn take_groups_rebuilt(&mut self) -> usize {
+        std::mem::take(&mut self.groups_rebuilt)
     }
 
     /// The plan for `camera`, with the costs measured so far.
@@ -130,7 +148,7 @@ impl Planner {
         let inputs = DepthInputs {
             camera: plan.camera,
             visible: plan.visible.clone(),
-            models: scene.models.iter().map(|m| m.transform).collect(),
+            models: scene.models.iter().map(|m| (m.transform, m.pose)).collect(),
             float_depth,
             reduced: options.plan.reduce_depth,
         };

@@ -190,7 +190,7 @@ fn depth_clip(
 
 /// Everything a light's volume draws are made from: the light's plan, the camera, the depth
 /// read back (by its generation), the volume options and the planner's choices, the light and
-/// the casters' transforms. While all of it is the same, the draws are what they were.
+/// the casters' transforms and poses. While all of it is the same, the draws are what they were.
 #[derive(PartialEq)]
 struct DrawInputs {
     plan: LightPlan,
@@ -199,7 +199,7 @@ struct DrawInputs {
     options: ShadowVolumeOptions,
     choices: ([bool; 8], usize),
     light: (glam::Vec3, f32),
-    transforms: Vec<Mat4>,
+    transforms: Vec<(Mat4, u64)>,
 }
 
 impl DrawInputs {
@@ -233,7 +233,10 @@ impl DrawInputs {
             transforms: lp
                 .volumes
                 .iter()
-                .map(|v| volume::group_transform(scene, groups.groups[v.group].owner))
+                .map(|v| {
+                    let g = &groups.groups[v.group];
+                    (volume::group_transform(scene, g.owner), g.pose)
+                })
                 .collect(),
         }
     }
@@ -878,6 +881,8 @@ impl LightVolumeDraws {
             let (boxes, box_hashes) = &local_boxes[&p.group];
             let receivers_key = {
                 let mut h = DefaultHasher::new();
+                // A reshaped model's pieces are new triangles.
+                group.pose.hash(&mut h);
                 culling.hash(&mut h);
                 truncate.hash(&mut h);
                 p.local_radius.to_bits().hash(&mut h);

@@ -125,15 +125,18 @@ pub struct Tag {
 }
 
 impl Tag {
+    /// The tag's origin and axes, as the scene's motion mixes them.
+    pub fn key(&self) -> crate::scene::motion::TagKey {
+        crate::scene::motion::TagKey {
+            origin: self.origin,
+            axis: self.axis,
+        }
+    }
+
     /// The tag's frame as a transform from the attached model's space into this model's space:
     /// columns are the three axes and the origin.
     pub fn matrix(&self) -> Mat4 {
-        Mat4::from_cols(
-            self.axis[0].extend(0.0),
-            self.axis[1].extend(0.0),
-            self.axis[2].extend(0.0),
-            self.origin.extend(1.0),
-        )
+        self.key().matrix()
     }
 }
 
@@ -773,6 +776,16 @@ impl AnimationId {
             LegsIdleCr => "LEGS_IDLECR",
             LegsTurn => "LEGS_TURN",
         }
+    }
+
+    /// The animation called `short` in scene files: its name without the `LEGS_`, `TORSO_` or
+    /// `BOTH_` prefix, any case (`run`, `idle`, `attack`, `stand2`).
+    pub fn from_short_name(short: &str) -> Option<AnimationId> {
+        AnimationId::ALL.into_iter().find(|id| {
+            id.name()
+                .split_once('_')
+                .is_some_and(|(_, rest)| rest.eq_ignore_ascii_case(short))
+        })
     }
 
     /// Whether it plays on the lower model, whose frames the file numbers after the torso's.

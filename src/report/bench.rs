@@ -21,7 +21,7 @@ use crate::report::estimate::{gbuffer_of, render_sampled};
 use crate::scene::Scene;
 use crate::scene::path::PathKey;
 use crate::truth::sampled::{FrameSample, Interval};
-use crate::truth::{Counts, ExactMasks};
+use crate::truth::{Counts, ExactMasks, Reference};
 use indicatif::{ProgressBar, ProgressStyle};
 use serde::Serialize;
 use std::collections::{BTreeMap, HashMap};
@@ -44,6 +44,26 @@ pub struct BenchSettings {
     /// Time `PASS_FRAMES` more frames pass by pass for each configuration's breakdown
     /// (`pass_ms`); `tune`'s cheap rungs go without.
     pub breakdown: bool,
+    /// Play the scene's motion (players, moving lights): frame `i` of the path is posed at
+    /// `i / path::FRAME_RATE_HZ` seconds. Off, the scene stands as loaded (its pose at 0).
+    pub motion: bool,
+    /// Sample every n-th measured frame against the sampled reference (1: every frame).
+    pub sample_every: usize,
+}
+
+impl BenchSettings {
+    /// The time frame `i` of the path is posed at.
+    pub fn time_of(&self, i: usize) -> f64 {
+        if self.motion {
+            i as f64 / crate::scene::path::FRAME_RATE_HZ
+        } else {
+            0.0
+        }
+    }
+
+    fn camera(&self, scene: &Scene, i: usize) -> crate::scene::Camera {
+        self.path[i % self.path.len()].apply(&scene.camera)
+    }
 }
 
 /// One point of a sweep.
@@ -111,11 +131,36 @@ pub fn sweep_configs(
     Ok(configs)
 }
 
+/// Frame times of the measured frames: median, spread and the tail a person sees as stutter.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Serialize)]
 pub struct MsStats {
     pub median: f64,
     pub min: f64,
     pub max: f64,
+    /// 95th and 99th percentiles (nearest rank: the smallest time at least that share of
+    /// frames do not exceed).
+    pub p95: f64,
+    pub p99: f64,
+}
+
+impl MsStats {
+    /// The 99th percentile over the median (1 for perfectly even frames).
+    pub fn p99_over_median(&self) -> f64 {
+        if self.median > 0.0 {
+            self.p99 / self.median
+        } else {
+            0.0
+        }
+    }
+}
+
+/// Nearest-rank percentile `q` (0..=1) of sorted `v`.
+fn percentile(sorted: &[f64], q: f64) -> f64 {
+    if sorted.is_empty() {
+        return 0.0;
+    }
+    let rank = (q * sorted.len() as f64).ceil() as usize;
+    sorted[rank.clamp(1, sorted.len()) - 1]
 }
 
 #[derive(Debug, Clone, Copy, Default, PartialEq, Serialize)]
@@ -142,6 +187,8 @@ fn stats(v: &[f64]) -> MsStats {
         median: median(&mut s),
         min: s.first().copied().unwrap_or(0.0),
         max: s.last().copied().unwrap_or(0.0),
+        p95: percentile(&s, 0.95),
+        p99: percentile(&s, 0.99),
     }
 }
 
@@ -204,6 +251,8 @@ pub struct BenchRow {
     pub plan: PlanStats,
     /// What the error frame reused from the frames before it.
     pub cache: CacheStats,
+    /// What the measured frames redid and reused, per frame on average.
+    pub redone: Redone,
     /// Options the GL could not run (or `gl.disable` hid), and what replaced them.
     pub fallbacks: Vec<Fallback>,
     /// The sampled reference on every measured frame of the path (None with shadows off or
@@ -240,10 +289,14 @@ pub struct SampledPath {
 }
 
 impl SampledPath {
-    fn new(samples: u32, frames: Vec<(FrameSample, f64, f64)>, frame_ms: f64) -> SampledPath {
-        let mut errors: Vec<f64> = frames.iter().map(|f| f.0.total.value).collect();
-        let mut masks: Vec<f64> = frames.iter().map(|f| f.1).collect();
-        let mut trace: Vec<f64> = frames.iter().map(|f| f.2).collect();
+    fn new(
+        samples: u32,
+        frames: Vec<(usize, FrameSample, f64, f64)>,
+        frame_ms: f64,
+    ) -> SampledPath {
+        let mut errors: Vec<f64> = frames.iter().map(|f| f.1.total.value).collect();
+        let mut masks: Vec<f64> = frames.iter().map(|f| f.2).collect();
+        let mut trace: Vec<f64> = frames.iter().map(|f| f.3).collect();
         let (masks_ms, trace_ms) = (median(&mut masks), median(&mut trace));
         SampledPath {
             samples_per_light: samples,
@@ -251,8 +304,7 @@ impl SampledPath {
             median: median(&mut errors),
             frames: frames
                 .into_iter()
-                .enumerate()
-                .map(|(i, (f, _, _))| SampledFrame {
+                .map(|(i, f, _, _)| SampledFrame {
                     frame: i,
                     error: f.total,
                     rays: f.rays,
@@ -305,8 +357,65 @@ pub struct Capture {
 #[derive(Clone)]
 struct Measured {
     frame_ms: Vec<f64>,
+    /// What each timed frame redid and reused, summed.
+    redone: Redone,
     passes: BTreeMap<String, Vec<f64>>,
     clock: &'static str,
+}
+
+/// What the measured frames redid and what they took from earlier frames, per frame on
+/// average: along a moving path, what motion costs the caches (a still scene redoes nothing
+/// after its first frame).
+#[derive(Debug, Clone, Copy, Default, PartialEq, Serialize)]
+pub struct Redone {
+    pub frames: usize,
+    /// Shadow maps drawn (a light, its view or a caster in it moved) and reused.
+    pub maps_rendered: f64,
+    pub maps_reused: f64,
+    /// Volume parts built (the light, a caster, the counting or the receivers their shadow
+    /// reaches changed) and reused.
+    pub volume_parts_built: f64,
+    pub volume_parts_reused: f64,
+    /// Caster groups built again (a model's vertices moved: animation).
+    pub caster_groups_built: f64,
+    /// Models whose vertices went up again (animation).
+    pub models_uploaded: f64,
+    /// GPU extrusion meshes built and uploaded (`shadow_volume.gpu_extrusion`).
+    pub extrusions_uploaded: f64,
+    /// Share of frames that took the planner's depth from the frame before.
+    pub depth_reused: f64,
+}
+
+impl Redone {
+    fn add(&mut self, c: &CacheStats) {
+        self.frames += 1;
+        self.maps_rendered += c.maps_rendered as f64;
+        self.maps_reused += c.maps_reused as f64;
+        self.volume_parts_built += c.volume_parts_built as f64;
+        self.volume_parts_reused += c.volume_parts_reused as f64;
+        self.caster_groups_built += c.caster_groups_built as f64;
+        self.models_uploaded += c.models_uploaded as f64;
+        self.extrusions_uploaded += c.extrusions_uploaded as f64;
+        self.depth_reused += f64::from(u8::from(c.depth_reused));
+    }
+
+    /// Sums as per-frame means.
+    fn per_frame(mut self) -> Redone {
+        let n = self.frames.max(1) as f64;
+        for v in [
+            &mut self.maps_rendered,
+            &mut self.maps_reused,
+            &mut self.volume_parts_built,
+            &mut self.volume_parts_reused,
+            &mut self.caster_groups_built,
+            &mut self.models_uploaded,
+            &mut self.extrusions_uploaded,
+            &mut self.depth_reused,
+        ] {
+            *v /= n;
+        }
+        self
+    }
 }
 
 /// The key under which a set of options is timed once.
@@ -314,32 +423,33 @@ fn options_key(options: &Options) -> String {
     serde_json::to_string(options).unwrap_or_default()
 }
 
-/// One frame's time, without per-pass glFinish (it would serialise llvmpipe's pipeline).
+/// One frame's time, without per-pass glFinish (it would serialise llvmpipe's pipeline), and
+/// what it reused.
 fn time_frame(
     renderer: &mut Renderer,
     scene: &Scene,
     camera: &crate::scene::Camera,
     options: &Options,
-) -> Result<f64, RenderError> {
+) -> Result<(f64, CacheStats), RenderError> {
     let frame_only = FrameRequest {
         frame_only: true,
         ..FrameRequest::default()
     };
-    Ok(renderer
-        .render_at(scene, camera, options, frame_only)?
-        .frame_ms)
+    let f = renderer.render_at(scene, camera, options, frame_only)?;
+    Ok((f.frame_ms, f.cache))
 }
 
 /// `frame_ms` with a few frames timed pass by pass for the breakdown.
 fn pass_breakdown(
     renderer: &mut Renderer,
-    scene: &Scene,
+    scene: &mut Scene,
     settings: &BenchSettings,
     options: &Options,
-    frame_ms: Vec<f64>,
+    (frame_ms, redone): (Vec<f64>, Redone),
 ) -> Result<Measured, RenderError> {
     let mut m = Measured {
         frame_ms,
+        redone: redone.per_frame(),
         passes: BTreeMap::new(),
         clock: "cpu",
     };
@@ -349,7 +459,8 @@ fn pass_breakdown(
         0
     };
     for i in 0..frames {
-        let camera = settings.path[i % settings.path.len()].apply(&scene.camera);
+        scene.pose_at(settings.time_of(i));
+        let camera = settings.camera(scene, i);
         let f = renderer.render_at(scene, &camera, options, FrameRequest::default())?;
         for (name, ms) in pass_totals(&f) {
             m.passes.entry(name).or_default().push(ms);
@@ -367,21 +478,38 @@ fn pass_breakdown(
 /// Runs a sweep on one loaded scene.
 pub struct Bench<'a> {
     renderer: &'a mut Renderer,
-    scene: &'a Scene,
+    /// The scene, posed at the frame being drawn (a copy: posing writes into it).
+    scene: Scene,
     settings: BenchSettings,
     /// Exact masks of the path's first view, by frame size and light.
     exact: ExactMasks,
     baselines: HashMap<String, f64>,
+    /// The reference of a moving scene's current pose, by its models' poses and transforms.
+    posed_reference: Option<(ModelsKey, Reference)>,
+}
+
+/// Where every model stands (its transform's bits) and in which pose.
+type ModelsKey = Vec<(u64, [u32; 16])>;
+
+/// Where every model stands and in which pose: what a reference of the casters depends on
+/// besides the loaded geometry.
+fn models_key(scene: &Scene) -> ModelsKey {
+    scene
+        .models
+        .iter()
+        .map(|m| (m.pose, m.transform.to_cols_array().map(f32::to_bits)))
+        .collect()
 }
 
 impl<'a> Bench<'a> {
-    pub fn new(renderer: &'a mut Renderer, scene: &'a Scene, settings: BenchSettings) -> Bench<'a> {
+    pub fn new(renderer: &'a mut Renderer, scene: &Scene, settings: BenchSettings) -> Bench<'a> {
         Bench {
             renderer,
-            scene,
+            scene: scene.clone(),
             settings,
             exact: ExactMasks::new(),
             baselines: HashMap::new(),
+            posed_reference: None,
         }
     }
 
@@ -390,18 +518,29 @@ impl<'a> Bench<'a> {
         self.renderer
     }
 
+    /// The scene as the bench last posed it.
+    pub fn scene(&self) -> &Scene {
+        &self.scene
+    }
+
     fn measure(&mut self, options: &Options) -> Result<Measured, RenderError> {
-        let (scene, settings) = (self.scene, &self.settings);
-        let camera = |i: usize| settings.path[i % settings.path.len()].apply(&scene.camera);
+        let (scene, settings) = (&mut self.scene, &self.settings);
+        scene.pose_at(settings.time_of(0));
         for _ in 0..settings.warmup {
+            let camera = settings.camera(scene, 0);
             self.renderer
-                .render_at(scene, &camera(0), options, FrameRequest::default())?;
+                .render_at(scene, &camera, options, FrameRequest::default())?;
         }
         let mut frame_ms = Vec::new();
+        let mut redone = Redone::default();
         for i in 0..settings.frames.max(1) {
-            frame_ms.push(time_frame(self.renderer, scene, &camera(i), options)?);
+            scene.pose_at(settings.time_of(i));
+            let camera = settings.camera(scene, i);
+            let (ms, cache) = time_frame(self.renderer, scene, &camera, options)?;
+            frame_ms.push(ms);
+            redone.add(&cache);
         }
-        pass_breakdown(self.renderer, scene, settings, options, frame_ms)
+        pass_breakdown(self.renderer, scene, settings, options, (frame_ms, redone))
     }
 
     /// Every configuration and every baseline they need, each on a renderer of its own sharing
@@ -412,8 +551,7 @@ impl<'a> Bench<'a> {
         configs: &[BenchConfig],
         bar: &ProgressBar,
     ) -> Result<HashMap<String, Measured>, RenderError> {
-        let (scene, settings) = (self.scene, &self.settings);
-        let camera = |i: usize| settings.path[i % settings.path.len()].apply(&scene.camera);
+        let (scene, settings) = (&mut self.scene, &self.settings);
         let mut timed: Vec<(String, Options)> = Vec::new();
         for c in configs {
             let mut wanted = vec![c.options.clone()];
@@ -429,25 +567,33 @@ impl<'a> Bench<'a> {
         }
         bar.set_message(format!("{} option sets, round-robin", timed.len()));
         let mut renderers = Vec::with_capacity(timed.len());
+        scene.pose_at(settings.time_of(0));
+        let first = settings.camera(scene, 0);
         for (_, o) in &timed {
             let mut r = self.renderer.sibling(o.width, o.height)?;
             r.load_scene(scene)?;
             for _ in 0..settings.warmup {
-                r.render_at(scene, &camera(0), o, FrameRequest::default())?;
+                r.render_at(scene, &first, o, FrameRequest::default())?;
             }
             renderers.push(r);
         }
         let mut frame_ms = vec![Vec::new(); timed.len()];
+        let mut redone = vec![Redone::default(); timed.len()];
         for i in 0..settings.frames.max(1) {
+            // Every configuration draws the same posed frame.
+            scene.pose_at(settings.time_of(i));
+            let camera = settings.camera(scene, i);
             for k in 0..timed.len() {
                 let j = (k + i) % timed.len();
-                let ms = time_frame(&mut renderers[j], scene, &camera(i), &timed[j].1)?;
+                let (ms, cache) = time_frame(&mut renderers[j], scene, &camera, &timed[j].1)?;
                 frame_ms[j].push(ms);
+                redone[j].add(&cache);
             }
         }
         let mut out = HashMap::new();
-        for (((key, o), r), ms) in timed.into_iter().zip(&mut renderers).zip(frame_ms) {
-            out.insert(key, pass_breakdown(r, scene, settings, &o, ms)?);
+        let measured = frame_ms.into_iter().zip(redone);
+        for (((key, o), r), m) in timed.into_iter().zip(&mut renderers).zip(measured) {
+            out.insert(key, pass_breakdown(r, scene, settings, &o, m)?);
         }
         Ok(out)
     }
@@ -482,9 +628,11 @@ impl<'a> Bench<'a> {
 
     /// The first frame of the path with `options`, compared with the exact reference.
     pub fn capture(&mut self, options: &Options) -> Result<Capture, RenderError> {
-        let camera = self.settings.path[0].apply(&self.scene.camera);
+        // The exact masks kept are those of the first frame, posed at its time.
+        self.scene.pose_at(self.settings.time_of(0));
+        let camera = self.settings.camera(&self.scene, 0);
         let frame = self.renderer.render_at(
-            self.scene,
+            &self.scene,
             &camera,
             options,
             FrameRequest {
@@ -494,7 +642,7 @@ impl<'a> Bench<'a> {
         )?;
         let m = self
             .exact
-            .measure(self.scene, gbuffer_of(&frame)?, &frame.masks);
+            .measure(&self.scene, gbuffer_of(&frame)?, &frame.masks);
         Ok(Capture {
             frame,
             exact: m.exact,
@@ -508,20 +656,36 @@ impl<'a> Bench<'a> {
     fn sample_path(
         &mut self,
         options: &Options,
-    ) -> Result<Vec<(FrameSample, f64, f64)>, RenderError> {
+    ) -> Result<Vec<(usize, FrameSample, f64, f64)>, RenderError> {
         let mut out = Vec::with_capacity(self.settings.frames);
-        for i in 0..self.settings.frames.max(1) {
-            let camera = self.settings.path[i % self.settings.path.len()].apply(&self.scene.camera);
-            let reference = self.exact.reference(self.scene);
+        let moving = self.settings.motion && !self.scene.motion.is_still();
+        for i in (0..self.settings.frames.max(1)).step_by(self.settings.sample_every.max(1)) {
+            self.scene.pose_at(self.settings.time_of(i));
+            let camera = self.settings.camera(&self.scene, i);
+            // A moving scene's casters are where this frame put them: a reference of its
+            // own, built again when a model moved (untimed, like the rest of the sampling).
+            let reference = if moving {
+                let key = models_key(&self.scene);
+                let stale = self.posed_reference.as_ref().is_none_or(|(k, _)| *k != key);
+                if stale {
+                    self.posed_reference = Some((key, Reference::build(&self.scene)));
+                }
+                match &self.posed_reference {
+                    Some((_, r)) => r,
+                    None => self.exact.reference(&self.scene),
+                }
+            } else {
+                self.exact.reference(&self.scene)
+            };
             let s = render_sampled(
                 self.renderer,
-                self.scene,
+                &self.scene,
                 &camera,
                 options,
                 reference,
                 (i as u64, true),
             )?;
-            out.push((s.sample, s.masks_ms, s.trace_ms));
+            out.push((i, s.sample, s.masks_ms, s.trace_ms));
         }
         Ok(out)
     }
@@ -643,6 +807,7 @@ impl<'a> Bench<'a> {
                 volumes,
                 plan,
                 cache,
+                redone: m.redone,
                 fallbacks,
                 sampled,
             });
@@ -673,6 +838,8 @@ pub(crate) fn test_row(technique: &str, label: &str, ms: f64, error: f64) -> Ben
             median: ms,
             min: ms,
             max: ms,
+            p95: ms,
+            p99: ms,
         },
         shadows_off_frame_ms: Median { median: 1.0 },
         ratio_to_shadows_off: ms,
@@ -687,6 +854,7 @@ pub(crate) fn test_row(technique: &str, label: &str, ms: f64, error: f64) -> Ben
         volumes: Vec::new(),
         plan: Default::default(),
         cache: Default::default(),
+        redone: Redone::default(),
     }
 }
 
@@ -722,5 +890,10 @@ mod tests {
         assert_eq!(median(&mut []), 0.0);
         let s = stats(&[5.0, 1.0, 3.0]);
         assert_eq!((s.median, s.min, s.max), (3.0, 1.0, 5.0));
+        // 100 frames of 1..=100 ms: the 95th is 95, the 99th 99; one frame is its own tail.
+        let hundred: Vec<f64> = (1..=100).rev().map(f64::from).collect();
+        let h = stats(&hundred);
+        assert_eq!((h.p95, h.p99, h.max), (95.0, 99.0, 100.0));
+        assert_eq!(stats(&[7.0]).p99, 7.0);
     }
 }

@@ -3,6 +3,7 @@
 pub mod bench;
 pub mod check;
 pub mod estimate;
+pub mod flythrough;
 pub mod images;
 pub mod plot;
 pub mod reproduce;

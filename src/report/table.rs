@@ -119,7 +119,13 @@ pub fn bench_table(rows: &[BenchRow]) -> Table {
         ("configuration".to_string(), Align::Left),
         ("lights".to_string(), Align::Right),
         ("frame ms (median)".to_string(), Align::Right),
+        ("p95, p99 ms".to_string(), Align::Right),
+        ("p99 / median".to_string(), Align::Right),
         ("× shadows off".to_string(), Align::Right),
+        (
+            "redone per frame (maps, volume parts, caster groups)".to_string(),
+            Align::Right,
+        ),
         ("error %".to_string(), Align::Right),
         ("error % excl. boundary".to_string(), Align::Right),
     ];
@@ -142,7 +148,13 @@ pub fn bench_table(rows: &[BenchRow]) -> Table {
             r.label.clone(),
             r.lights.to_string(),
             format!("{:.2}", r.frame_ms.median),
+            format!("{:.2}, {:.2}", r.frame_ms.p95, r.frame_ms.p99),
+            format!("{:.2}", r.frame_ms.p99_over_median()),
             format!("{:.2}", r.ratio_to_shadows_off),
+            format!(
+                "{:.1}, {:.1}, {:.1}",
+                r.redone.maps_rendered, r.redone.volume_parts_built, r.redone.caster_groups_built
+            ),
             format!("{:.3}", 100.0 * r.error.total),
             format!("{:.3}", 100.0 * r.error.total_excl_boundary),
         ];
@@ -193,7 +205,11 @@ pub fn path_error_table(rows: &[BenchRow]) -> Table {
         .max()
         .unwrap_or(0);
     for i in 0..frames {
-        let mut row = vec![i.to_string()];
+        let frame = sampled
+            .iter()
+            .find_map(|r| r.sampled.as_ref().and_then(|p| p.frames.get(i)))
+            .map_or(i, |f| f.frame);
+        let mut row = vec![frame.to_string()];
         for r in &sampled {
             let cell = r
                 .sampled

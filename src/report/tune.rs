@@ -409,6 +409,9 @@ fn measure_stage(
         progress: false,
         interleave: stage.interleave,
         breakdown: stage.breakdown,
+        // The scene as loaded: tune compares techniques, the path moves the camera.
+        motion: false,
+        sample_every: 1,
     };
     let rows = Bench::new(renderer, scene, bench).run_with(configs, bar)?;
     let rung = Rung {

@@ -8,6 +8,7 @@ pub mod authored;
 pub mod builtin;
 pub mod camera;
 pub mod light;
+pub mod motion;
 pub mod path;
 pub mod shapes;
 pub mod vis;
@@ -172,6 +173,20 @@ pub struct Surface {
 pub struct ModelInstance {
     pub name: String,
     pub transform: Mat4,
+    /// Which vertices the model holds: a value no other pose had, taken anew whenever its
+    /// vertices change ([`Scene::model_reshaped`]), so that what is built from them (its caster
+    /// group, its volumes, the maps it is drawn into, the GPU's copy) is kept by it.
+    pub pose: u64,
+}
+
+impl ModelInstance {
+    pub fn new(name: &str, transform: Mat4) -> ModelInstance {
+        ModelInstance {
+            name: name.to_string(),
+            transform,
+            pose: next_revision(),
+        }
+    }
 }
 
 /// Everything to render. Vertices of world surfaces are in world space; model surfaces are in their
@@ -192,6 +207,8 @@ pub struct Scene {
     pub options: toml::Table,
     /// BSP visibility of a Quake 3 world (None for built-in scenes: everything is visible).
     pub world: Option<std::sync::Arc<vis::WorldVis>>,
+    /// What moves, and how ([`motion::Motion::pose`] poses the scene at a time).
+    pub motion: motion::Motion,
     /// Which geometry this is: a value no other scene's geometry had, taken anew whenever
     /// surfaces are added ([`Scene::push_surface`], [`Scene::add_surface`]). Whatever is built
     /// from the geometry (the planner's caster groups) is kept by it.
@@ -201,6 +218,10 @@ pub struct Scene {
 /// The source of [`Scene::revision`]s: unique across scenes, so that a cache keyed by one
 /// never takes another scene's geometry for its own.
 static REVISIONS: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(1);
+
+fn next_revision() -> u64 {
+    REVISIONS.fetch_add(1, std::sync::atomic::Ordering::Relaxed)
+}
 
 impl Scene {
     /// Transform that takes a surface's vertices to world space.
@@ -289,7 +310,61 @@ impl Scene {
 
     /// Takes a new revision: the geometry changed.
     fn touch(&mut self) {
-        self.revision = REVISIONS.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+        self.revision = next_revision();
+    }
+
+    /// World bounds of surface `i` under its owner's current transform.
+    pub fn surface_bounds(&self, i: usize) -> Aabb {
+        let s = &self.surfaces[i];
+        let t = self.surface_transform(s);
+        let range = s.first_index as usize..(s.first_index + s.index_count) as usize;
+        Aabb::from_points(
+            self.indices[range]
+                .iter()
+                .map(|&v| t.transform_point3(self.vertices[v as usize].pos())),
+        )
+    }
+
+    /// Poses the scene at `t` seconds by its own [`motion`](Scene::motion).
+    pub fn pose_at(&mut self, t: f64) -> motion::Posed {
+        let motion = std::mem::take(&mut self.motion);
+        let posed = motion.pose(self, t);
+        self.motion = motion;
+        posed
+    }
+
+    /// Model `m`'s transform changed: its surfaces' bounds follow.
+    pub fn model_moved(&mut self, m: usize) {
+        for i in 0..self.surfaces.len() {
+            if self.surfaces[i].owner == SurfaceOwner::Model(m) {
+                self.surfaces[i].bounds = self.surface_bounds(i);
+            }
+        }
+    }
+
+    /// Model `m`'s vertices changed: its bounds follow and it takes a new pose (see
+    /// [`ModelInstance::pose`]), and so do its copies, which share its vertices.
+    pub fn model_reshaped(&mut self, m: usize) {
+        let runs: Vec<u32> = self
+            .surfaces
+            .iter()
+            .filter(|s| s.owner == SurfaceOwner::Model(m))
+            .map(|s| s.first_index)
+            .collect();
+        let mut sharing: Vec<usize> = self
+            .surfaces
+            .iter()
+            .filter_map(|s| match s.owner {
+                SurfaceOwner::Model(o) if runs.contains(&s.first_index) => Some(o),
+                _ => None,
+            })
+            .collect();
+        sharing.sort_unstable();
+        sharing.dedup();
+        for o in sharing {
+            self.model_moved(o);
+            self.models[o].pose = next_revision();
+        }
     }
 
     /// Number of triangles drawn.

@@ -9,6 +9,11 @@ use glam::Vec3;
 use std::path::Path;
 use thiserror::Error;
 
+/// Path frames per second of scene time: a path's frame `i` shows the scene's motion at
+/// `i / FRAME_RATE_HZ` seconds. Quake 3's server runs (and its demos store snapshots) at this
+/// rate (`sv_fps 20`), so a minute of walking is 1200 frames.
+pub const FRAME_RATE_HZ: f64 = 20.0;
+
 /// Frames of DarkPlaces' `timerefresh`, which turns the view once around in place.
 pub const TURN_FRAMES: usize = 128;
 /// Most frames a recorded path may hold.

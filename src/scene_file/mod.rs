@@ -3,6 +3,7 @@
 //!
 //! ```toml
 //! name = "oa_dm1"
+//! flythrough = "../paths/oa_dm1.path"  # the camera path `bench` takes by default
 //! [map]
 //! bsp = "maps/oa_dm1.bsp"        # path inside the data set
 //! # data = "/somewhere"           # default: $SHADOWLAB_DATA or ~/.cache/shadowlab/openarena
@@ -21,10 +22,18 @@
 //! cutoff = 40                     # spot half-angle, degrees (0..180)
 //! radius = 800                    # range
 //! color = [1, 1, 1]
+//! [[light_motion]]
+//! light = "light0"                # any light of the scene, by name (the map's too)
+//! orbit = { centre = [0, 0, 0], period = 6 }   # circling the vertical through centre
+//! #                                             (or radius = 40 instead of centre),
+//! # route = [[0, 0, 100], [200, 0, 100]]  speed = 100   # or along a closed route,
+//! # flicker = { amount = 0.4, rate = 6 }                 # or in place, its brightness varying
 //! [[model]]
 //! player = "sarge"                # or md3 = "models/..."; skin = "default"; frame = 0
 //! position = [0, 0, 24]
 //! yaw = 90
+//! # animation = "run"             # a player's legs animation (torso_animation: default stand)
+//! # route = [[0, 0, 24], [300, 0, 24]]  speed = 150   # walked in a loop, facing the way
 //! [options]
 //! "shadow_map.size" = 1024
 //! ```
@@ -34,12 +43,14 @@ pub mod load;
 use crate::options::Options;
 use crate::q3::builder::SceneBuilder;
 use crate::q3::entities::{self, Entity, SpawnPoint};
+use crate::q3::md3::AnimationId;
 use crate::q3::model::{self, ModelError};
 use crate::q3::pk3::{self, Vfs, VfsError};
 use crate::q3::rtlights;
 use crate::q3::shader::ShaderLibrary;
 use crate::q3::world::{self, MapCounts, MapError};
 use crate::scene::authored::ShapeSection;
+use crate::scene::motion::{LightMotion, LightPath, Route, Walk};
 use crate::scene::{Camera, Light, LightKind, Scene, builtin};
 use glam::{Mat4, Vec3};
 use serde::Deserialize;
@@ -134,6 +145,42 @@ pub struct LightSection {
     pub color: Option<[f32; 3]>,
 }
 
+/// How one light of the scene moves (give one of `orbit`, `route` and `flicker`). A spot
+/// with a `target` keeps pointing at it.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct LightMotionSection {
+    /// The light's name (`[[light]] name`, or a map light's: `light0`, `rt0`, …).
+    pub light: String,
+    /// Moves in a horizontal circle.
+    pub orbit: Option<OrbitSection>,
+    /// Moves along these points in a closed loop at `speed`.
+    pub route: Option<Vec<[f32; 3]>>,
+    /// Units per second along `route` (default 100).
+    pub speed: Option<f32>,
+    /// Stays put, its brightness varying.
+    pub flicker: Option<FlickerSection>,
+}
+
+/// A light's circle, starting from the light's position (which sets its height), once every
+/// `period` seconds: about the vertical line through `centre`, or of `radius` about the line
+/// that far along -X from the light (for map lights, whose positions the file does not hold).
+#[derive(Debug, Clone, Copy, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct OrbitSection {
+    pub centre: Option<[f32; 3]>,
+    pub radius: Option<f32>,
+    pub period: f32,
+}
+
+/// A light's flicker: brightness between `1 - amount` and 1, about `rate` times a second.
+#[derive(Debug, Clone, Copy, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct FlickerSection {
+    pub amount: f32,
+    pub rate: f32,
+}
+
 #[derive(Debug, Clone, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct ModelSection {
@@ -148,6 +195,15 @@ pub struct ModelSection {
     /// Legs and torso frames of a player (default: idle legs, standing torso).
     pub legs_frame: Option<usize>,
     pub torso_frame: Option<usize>,
+    /// A player's legs animation, played in a loop (`run`, `walk`, `idle`, …: the names of
+    /// `animation.cfg` without `LEGS_`).
+    pub animation: Option<String>,
+    /// The torso's animation with `animation` (default `stand`).
+    pub torso_animation: Option<String>,
+    /// Points the model walks in a closed loop, facing the way it goes (its origin on them).
+    pub route: Option<Vec<[f32; 3]>>,
+    /// Units per second along `route` (default 150; Quake 3 runs at 320).
+    pub speed: Option<f32>,
 }
 
 /// A parsed scene file.
@@ -155,6 +211,9 @@ pub struct ModelSection {
 #[serde(deny_unknown_fields)]
 pub struct SceneFile {
     pub name: Option<String>,
+    /// The scene's recorded camera path (relative to the file): `bench` takes it when given
+    /// no `--path`.
+    pub flythrough: Option<PathBuf>,
     /// The Quake 3 map; without one the scene is `base`.
     pub map: Option<MapSection>,
     /// Without a map: the built-in room (default) or nothing, for scenes made of `[[shape]]`s.
@@ -169,6 +228,8 @@ pub struct SceneFile {
     pub lights: LightsSection,
     #[serde(default)]
     pub light: Vec<LightSection>,
+    #[serde(default)]
+    pub light_motion: Vec<LightMotionSection>,
     #[serde(default)]
     pub model: Vec<ModelSection>,
     /// Option overrides, as `shadowlab options` lists them.
@@ -191,9 +252,14 @@ pub enum Base {
 #[derive(Debug, Clone, Default)]
 pub struct LoadReport {
     pub counts: Option<MapCounts>,
+    /// The scene file's `flythrough`, resolved against the file's folder.
+    pub flythrough: Option<PathBuf>,
     pub warnings: Vec<String>,
     pub load_ms: f64,
 }
+
+/// Most points a route may hold.
+pub const MAX_ROUTE_POINTS: usize = 4096;
 
 fn finite3(v: [f32; 3]) -> bool {
     v.iter().all(|x| x.is_finite())
@@ -279,6 +345,99 @@ impl SceneFile {
         })
     }
 
+    /// The motion `[[light_motion]]` `l` gives its light.
+    fn light_motion(
+        &self,
+        scene: &Scene,
+        l: &LightMotionSection,
+    ) -> Result<LightMotion, SceneFileError> {
+        let name = &l.light;
+        let index = scene
+            .lights
+            .iter()
+            .position(|x| &x.name == name)
+            .ok_or_else(|| {
+                let names: Vec<&str> = scene.lights.iter().map(|x| x.name.as_str()).collect();
+                self.invalid(format!(
+                    "[[light_motion]] names `{name}`, which is none of the scene's lights ({})",
+                    names.join(", ")
+                ))
+            })?;
+        let light = &scene.lights[index];
+        let path = match (l.orbit, &l.route, l.flicker) {
+            (Some(o), None, None) => {
+                let centre = match (o.centre, o.radius) {
+                    (Some(c), None) if finite3(c) => Some(Vec3::from_array(c)),
+                    (None, Some(r)) if r.is_finite() => Some(light.position - Vec3::X * r),
+                    _ => None,
+                };
+                let (Some(centre), true) = (centre, o.period.is_finite() && o.period > 0.0) else {
+                    return Err(self.invalid(format!(
+                        "[[light_motion]] {name}: orbit needs one finite centre or radius, and \
+                         a period > 0"
+                    )));
+                };
+                LightPath::Orbit {
+                    centre,
+                    start: light.position,
+                    period: o.period,
+                }
+            }
+            (None, Some(points), None) => LightPath::Route(self.route(
+                &format!("[[light_motion]] {name}"),
+                points,
+                l.speed.unwrap_or(100.0),
+            )?),
+            (None, None, Some(f)) => {
+                if !(f.amount.is_finite() && f.rate.is_finite()) {
+                    return Err(self.invalid(format!(
+                        "[[light_motion]] {name}: flicker needs finite amount and rate"
+                    )));
+                }
+                LightPath::Flicker {
+                    amount: f.amount,
+                    rate: f.rate,
+                }
+            }
+            _ => {
+                return Err(self.invalid(format!(
+                    "[[light_motion]] {name}: give one of orbit, route and flicker"
+                )));
+            }
+        };
+        // A spot keeps pointing where it pointed from its start.
+        let aim = match light.kind {
+            LightKind::Spot { direction, .. } => Some(light.position + direction * light.radius),
+            LightKind::Omni => None,
+        };
+        Ok(LightMotion {
+            light: index,
+            path,
+            aim,
+            color: light.color,
+        })
+    }
+
+    /// A route of `what`: at least two finite points, a finite speed >= 0, at most
+    /// [`MAX_ROUTE_POINTS`].
+    fn route(&self, what: &str, points: &[[f32; 3]], speed: f32) -> Result<Route, SceneFileError> {
+        if points.len() < 2 || points.len() > MAX_ROUTE_POINTS {
+            return Err(self.invalid(format!(
+                "{what}: a route needs 2 to {MAX_ROUTE_POINTS} points, not {}",
+                points.len()
+            )));
+        }
+        if !(points.iter().all(|p| finite3(*p)) && speed.is_finite() && speed >= 0.0) {
+            return Err(self.invalid(format!(
+                "{what}: route points and speed must be finite (speed >= 0)"
+            )));
+        }
+        Ok(Route {
+            points: points.iter().map(|p| Vec3::from_array(*p)).collect(),
+            speed,
+        })
+    }
+
     fn vfs(&self, map: &MapSection) -> Result<Vfs, SceneFileError> {
         let data = map
             .data
@@ -320,12 +479,19 @@ impl SceneFile {
             let light = self.light(i, l)?;
             scene.lights.push(light);
         }
+        for m in &self.light_motion {
+            let motion = self.light_motion(&scene, m)?;
+            scene.motion.lights.push(motion);
+        }
         if let Some(n) = &self.name {
             scene.name = n.clone();
         }
         settle_placed_lights(&mut scene);
+        // The scene as loaded is the scene at t = 0.
+        scene.pose_at(0.0);
         warn_of_lights_in_solid(&scene, &mut report);
         scene.options = self.options.clone();
+        report.flythrough = self.flythrough.as_ref().map(|p| self.relative(p));
         report.load_ms = start.elapsed().as_secs_f64() * 1e3;
         Ok((scene, report))
     }
@@ -422,22 +588,75 @@ impl SceneFile {
         }
         let transform = Mat4::from_translation(Vec3::from_array(m.position))
             * Mat4::from_rotation_z(m.yaw.to_radians());
-        match (&m.player, &m.md3) {
+        let index = match (&m.player, &m.md3) {
             (Some(p), None) => {
-                let frames = m.legs_frame.zip(m.torso_frame);
                 let skin = m.skin.as_deref().unwrap_or("default");
-                model::add_player(builder, vfs, p, skin, frames, transform)?;
+                match self.player_animations(i, m)? {
+                    Some(clips) => {
+                        let (index, rig) =
+                            model::add_animated_player(builder, vfs, p, skin, clips, transform)?;
+                        builder.scene.motion.rigs.push(rig);
+                        index
+                    }
+                    None => {
+                        let frames = m.legs_frame.zip(m.torso_frame);
+                        model::add_player(builder, vfs, p, skin, frames, transform)?
+                    }
+                }
             }
             (None, Some(path)) => {
-                model::add_md3(builder, vfs, path, m.frame.unwrap_or(0), transform)?;
+                if m.animation.is_some() || m.torso_animation.is_some() {
+                    return Err(self.invalid(format!(
+                        "[[model]] {i}: animation is for players (give frame for an md3)"
+                    )));
+                }
+                model::add_md3(builder, vfs, path, m.frame.unwrap_or(0), transform)?
             }
             _ => {
                 return Err(
                     self.invalid(format!("[[model]] {i}: give exactly one of player or md3"))
                 );
             }
+        };
+        if let Some(points) = &m.route {
+            let route = self.route(&format!("[[model]] {i}"), points, m.speed.unwrap_or(150.0))?;
+            builder.scene.motion.walks.push(Walk {
+                model: index,
+                route,
+                yaw_deg: 0.0,
+            });
         }
         Ok(())
+    }
+
+    /// The (legs, torso) animations `[[model]]` `i` plays; None when it names none.
+    fn player_animations(
+        &self,
+        i: usize,
+        m: &ModelSection,
+    ) -> Result<Option<(AnimationId, AnimationId)>, SceneFileError> {
+        if m.animation.is_none() && m.torso_animation.is_none() {
+            return Ok(None);
+        }
+        let named = |name: &str, legs: bool| {
+            AnimationId::from_short_name(name)
+                .filter(|id| id.is_legs_only() == legs)
+                .ok_or_else(|| {
+                    let which: Vec<String> = AnimationId::ALL
+                        .into_iter()
+                        .filter(|id| id.is_legs_only() == legs)
+                        .filter_map(|id| id.name().split_once('_').map(|(_, n)| n.to_lowercase()))
+                        .collect();
+                    self.invalid(format!(
+                        "[[model]] {i}: no {} animation `{name}` (one of {})",
+                        if legs { "legs" } else { "torso" },
+                        which.join(", ")
+                    ))
+                })
+        };
+        let legs = named(m.animation.as_deref().unwrap_or("idle"), true)?;
+        let torso = named(m.torso_animation.as_deref().unwrap_or("stand"), false)?;
+        Ok(Some((legs, torso)))
     }
 
     /// The camera at the spawn point `[camera] spawn` names (eye height up, its yaw), else the

@@ -1,6 +1,7 @@
 //! Shadow algorithms' CPU side: edge connectivity, shadow volumes and light views.
 
 pub mod edges;
+pub mod extrusion;
 pub mod views;
 pub mod volume;
 pub mod warp;

@@ -67,6 +67,8 @@ pub struct CasterGroup {
     /// How the components were cut into `chunks`, children before parents: a component of
     /// more than one chunk has a node for each cut.
     pub chunk_tree: Vec<ChunkNode>,
+    /// The owner's pose it was built from (`ModelInstance::pose`; 0 for the world).
+    pub pose: u64,
 }
 
 /// One cut of [`split_chunks`]: the chunks `first..end` (consecutive: each half's chunks follow
@@ -351,6 +353,7 @@ impl CasterGroup {
             }
         }
         CasterGroup {
+            pose: 0,
             owner,
             connectivity,
             components,
@@ -441,34 +444,72 @@ impl CasterGroup {
 impl CasterGroups {
     /// Groups the scene's casting triangles by owner, in each owner's own space.
     pub fn build(scene: &Scene) -> CasterGroups {
-        // Per owner: its triangles, and whether each is alpha-tested.
-        let mut by_owner: Vec<(SurfaceOwner, Vec<[Vec3; 3]>, Vec<bool>)> = Vec::new();
+        let mut owners: Vec<SurfaceOwner> = Vec::new();
         for s in &scene.surfaces {
+            let m = &scene.materials[s.material];
+            if m.visible && m.casts_shadows && !owners.contains(&s.owner) {
+                owners.push(s.owner);
+            }
+        }
+        CasterGroups {
+            groups: owners
+                .into_iter()
+                .map(|o| CasterGroup::of_owner(scene, o))
+                .collect(),
+        }
+    }
+
+    /// These groups with those of models whose pose changed built again (the scene's
+    /// surfaces are the ones these were built from); returns how many were rebuilt.
+    pub fn reposed(&self, scene: &Scene) -> (CasterGroups, usize) {
+        let mut rebuilt = 0;
+        let groups = self
+            .groups
+            .iter()
+            .map(|g| match g.owner {
+                SurfaceOwner::Model(m) if scene.models.get(m).is_some_and(|i| i.pose != g.pose) => {
+                    rebuilt += 1;
+                    CasterGroup::of_owner(scene, g.owner)
+                }
+                _ => g.clone(),
+            })
+            .collect();
+        (CasterGroups { groups }, rebuilt)
+    }
+
+    /// Whether every model group was built from its model's current pose.
+    pub fn posed_as(&self, scene: &Scene) -> bool {
+        self.groups.iter().all(|g| match g.owner {
+            SurfaceOwner::Model(m) => scene.models.get(m).is_some_and(|i| i.pose == g.pose),
+            SurfaceOwner::World => true,
+        })
+    }
+}
+
+impl CasterGroup {
+    /// The casting triangles of `owner`, welded and connected, with its pose.
+    pub fn of_owner(scene: &Scene, owner: SurfaceOwner) -> CasterGroup {
+        let mut tris = Vec::new();
+        let mut alpha = Vec::new();
+        for s in scene.surfaces.iter().filter(|s| s.owner == owner) {
             let m = &scene.materials[s.material];
             if !(m.visible && m.casts_shadows) {
                 continue;
             }
-            let slot = match by_owner.iter().position(|(o, ..)| *o == s.owner) {
-                Some(i) => i,
-                None => {
-                    by_owner.push((s.owner, Vec::new(), Vec::new()));
-                    by_owner.len() - 1
-                }
-            };
             let range = s.first_index as usize..(s.first_index + s.index_count) as usize;
             for t in scene.indices[range].chunks_exact(3) {
                 let p = |k: usize| scene.vertices[t[k] as usize].pos();
-                by_owner[slot].1.push([p(0), p(1), p(2)]);
-                by_owner[slot].2.push(m.alpha_test.is_some());
+                tris.push([p(0), p(1), p(2)]);
+                alpha.push(m.alpha_test.is_some());
             }
         }
-        CasterGroups {
-            groups: by_owner
-                .into_iter()
-                .map(|(owner, tris, alpha)| {
-                    CasterGroup::build(owner, tris).with_alpha_tested(&alpha)
-                })
-                .collect(),
+        let pose = match owner {
+            SurfaceOwner::Model(m) => scene.models[m].pose,
+            SurfaceOwner::World => 0,
+        };
+        CasterGroup {
+            pose,
+            ..CasterGroup::build(owner, tris).with_alpha_tested(&alpha)
         }
     }
 }

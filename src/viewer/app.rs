@@ -136,6 +136,14 @@ impl App {
         r.last = now;
         state.run_script().map_err(ViewerError::Script)?;
         state.advance_camera(dt);
+        // A script's frames step the motion evenly, so that what it captures does not depend on
+        // how fast frames come.
+        let motion_dt = if state.scripted() {
+            super::state::MotionClock::STEP
+        } else {
+            f64::from(dt)
+        };
+        state.advance_motion(motion_dt, 0);
         if state.needs_upload {
             r.renderer.load_scene(&state.scene)?;
             state.live_error.reset();

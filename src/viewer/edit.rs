@@ -1,7 +1,6 @@
 //! Scene edits the viewer makes: lights added, removed, moved and re-aimed; models moved or
 //! copied. GL-free; the caller re-uploads the scene when [`Edit::needs_upload`] says so.
 
-use crate::geometry::Aabb;
 use crate::options::Options;
 use crate::scene::{Light, LightKind, Scene, SurfaceOwner};
 use glam::{Mat4, Vec3};
@@ -13,26 +12,10 @@ pub struct Edit {
     pub needs_upload: bool,
 }
 
-/// World bounds of surface `i` under its owner's current transform.
-fn surface_bounds(scene: &Scene, i: usize) -> Aabb {
-    let s = &scene.surfaces[i];
-    let t = scene.surface_transform(s);
-    let range = s.first_index as usize..(s.first_index + s.index_count) as usize;
-    Aabb::from_points(
-        scene.indices[range]
-            .iter()
-            .map(|&v| t.transform_point3(scene.vertices[v as usize].pos())),
-    )
-}
-
 /// Places model `m` with `transform` (its surfaces' bounds follow).
 pub fn move_model(scene: &mut Scene, m: usize, transform: Mat4) -> Edit {
     scene.models[m].transform = transform;
-    for i in 0..scene.surfaces.len() {
-        if scene.surfaces[i].owner == SurfaceOwner::Model(m) {
-            scene.surfaces[i].bounds = surface_bounds(scene, i);
-        }
-    }
+    scene.model_moved(m);
     Edit {
         needs_upload: false,
     }
@@ -41,10 +24,10 @@ pub fn move_model(scene: &mut Scene, m: usize, transform: Mat4) -> Edit {
 /// A second instance of model `m` with `transform`, sharing its vertices; returns its index.
 pub fn copy_model(scene: &mut Scene, m: usize, transform: Mat4) -> (usize, Edit) {
     let index = scene.models.len();
-    scene.models.push(crate::scene::ModelInstance {
-        name: format!("{} (copy)", scene.models[m].name),
-        transform,
-    });
+    let name = format!("{} (copy)", scene.models[m].name);
+    scene
+        .models
+        .push(crate::scene::ModelInstance::new(&name, transform));
     let copies: Vec<_> = scene
         .surfaces
         .iter()
@@ -55,7 +38,7 @@ pub fn copy_model(scene: &mut Scene, m: usize, transform: Mat4) -> (usize, Edit)
         s.owner = SurfaceOwner::Model(index);
         scene.add_surface(s);
         let i = scene.surfaces.len() - 1;
-        scene.surfaces[i].bounds = surface_bounds(scene, i);
+        scene.surfaces[i].bounds = scene.surface_bounds(i);
     }
     (index, Edit { needs_upload: true })
 }
@@ -144,10 +127,9 @@ mod tests {
     fn moved_and_copied_models_carry_their_bounds() {
         let mut scene = builtin::default_scene();
         // A one-triangle model.
-        scene.models.push(crate::scene::ModelInstance {
-            name: "tri".into(),
-            transform: Mat4::IDENTITY,
-        });
+        scene
+            .models
+            .push(crate::scene::ModelInstance::new("tri", Mat4::IDENTITY));
         let m = scene.models.len() - 1;
         let vertices: Vec<_> = [Vec3::ZERO, Vec3::X, Vec3::Y]
             .iter()

@@ -17,6 +17,10 @@
 //! error                       # compute the error image against the exact reference, wait
 //! screenshot out.png          # the window, panel and overlays included
 //! frame out.png               # the 3D view only (the renderer's frame)
+//! play off                    # the scene's motion (players, moving lights): on | off
+//! time 2.5                    # go to this many seconds of the motion
+//! step 3                      # step the motion by path frames (1/20 s; negative: back)
+//! grab on                     # the selected light moves with the camera: on | off
 //! quit
 //! ```
 
@@ -80,6 +84,14 @@ pub enum Command {
     Error,
     Screenshot(PathBuf),
     Frame(PathBuf),
+    /// Play or pause the scene's motion.
+    Play(bool),
+    /// Go to this time of the motion (seconds).
+    Time(f64),
+    /// Step the motion by path frames.
+    Step(i64),
+    /// Grab or drop the selected light.
+    Grab(bool),
     Quit,
 }
 
@@ -185,6 +197,19 @@ fn parse_line(line: &str) -> Result<Option<Command>, String> {
         "error" => Command::Error,
         "screenshot" => Command::Screenshot(path()?),
         "frame" => Command::Frame(path()?),
+        "play" => Command::Play(on_off(args.first().copied().unwrap_or("on"))?),
+        "time" => Command::Time(
+            args.first()
+                .and_then(|a| a.parse::<f64>().ok())
+                .filter(|t| t.is_finite() && *t >= 0.0)
+                .ok_or("`time` needs seconds >= 0")?,
+        ),
+        "step" => Command::Step(
+            args.first()
+                .map_or(Ok(1), |a| a.parse::<i64>())
+                .map_err(|e| e.to_string())?,
+        ),
+        "grab" => Command::Grab(on_off(args.first().copied().unwrap_or("on"))?),
         "quit" | "exit" => Command::Quit,
         other => return Err(format!("unknown command `{other}`")),
     };

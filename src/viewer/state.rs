@@ -93,6 +93,32 @@ pub struct ViewerState {
     pub needs_upload: bool,
     pub pending: Vec<Pending>,
     screenshots: usize,
+    /// The scene's motion (players, moving lights): where in time, and whether it plays.
+    pub clock: MotionClock,
+    /// The selected light follows the camera at this offset (G: grab it, G again: drop it).
+    pub grabbed: Option<glam::Vec3>,
+}
+
+/// The viewer's time in the scene's motion.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct MotionClock {
+    /// Seconds of scene time.
+    pub time: f64,
+    pub playing: bool,
+}
+
+impl MotionClock {
+    /// One step of the scene's time: a path frame (1/20 s).
+    pub const STEP: f64 = 1.0 / crate::scene::path::FRAME_RATE_HZ;
+
+    /// Advances `dt` seconds while playing; steps `frames` path frames either way (not
+    /// before 0).
+    pub fn advance(&mut self, dt: f64, frames: i64) {
+        if self.playing {
+            self.time += dt;
+        }
+        self.time = (self.time + frames as f64 * Self::STEP).max(0.0);
+    }
 }
 
 impl ViewerState {
@@ -128,6 +154,11 @@ impl ViewerState {
             needs_upload: false,
             pending: Vec::new(),
             screenshots: 0,
+            clock: MotionClock {
+                time: 0.0,
+                playing: true,
+            },
+            grabbed: None,
         }
     }
 
@@ -151,6 +182,7 @@ impl ViewerState {
         }
         for m in &self.scene.models {
             m.transform.to_cols_array().map(f32::to_bits).hash(&mut h);
+            m.pose.hash(&mut h);
         }
         self.scene.surfaces.len().hash(&mut h);
         h.finish()
@@ -183,7 +215,8 @@ impl ViewerState {
         }
     }
 
-    /// Moves the camera for one frame: a replayed pose, or the fly controls.
+    /// Moves the camera for one frame: a replayed pose, or the fly controls; a grabbed light
+    /// goes with it.
     pub fn advance_camera(&mut self, dt: f32) {
         if let Some(k) = self.replay.pop_front() {
             self.camera = k.apply(&self.camera);
@@ -194,6 +227,49 @@ impl ViewerState {
         if let Some((_, keys)) = &mut self.recording {
             keys.push(PathKey::of(&self.camera));
         }
+        if let Some(offset) = self.grabbed {
+            let l = self.selected_light;
+            let to = self.camera.position + offset;
+            if self.scene.lights.get(l).is_some_and(|x| x.position != to) {
+                Arc::make_mut(&mut self.scene).lights[l].position = to;
+            }
+        }
+    }
+
+    /// Advances the scene's motion by `dt` seconds (while playing) and `frames` steps, and
+    /// poses the scene there. A grabbed light stays where the camera put it.
+    pub fn advance_motion(&mut self, dt: f64, frames: i64) {
+        if self.scene.motion.is_still() {
+            return;
+        }
+        let before = self.clock.time;
+        self.clock.advance(dt, frames);
+        if self.clock.time != before || frames != 0 {
+            let grabbed = self
+                .grabbed
+                .and(self.scene.lights.get(self.selected_light).cloned());
+            let scene = Arc::make_mut(&mut self.scene);
+            scene.pose_at(self.clock.time);
+            if let Some(light) = grabbed {
+                scene.lights[self.selected_light] = light;
+            }
+        }
+    }
+
+    /// Grabs the selected light (it keeps its offset from the camera as the camera moves),
+    /// or drops it.
+    pub fn toggle_grab(&mut self) {
+        let l = self.selected_light;
+        self.grabbed = match (self.grabbed, self.scene.lights.get(l)) {
+            (None, Some(light)) => {
+                self.status = format!("light {l} grabbed: it moves with the camera (G drops it)");
+                Some(light.position - self.camera.position)
+            }
+            _ => {
+                self.status = format!("light {l} dropped");
+                None
+            }
+        };
     }
 
     /// Notes a finished frame's time and steps.
@@ -429,6 +505,17 @@ impl ViewerState {
                     self.quit = true;
                     return Ok(());
                 }
+                Command::Play(on) => self.clock.playing = on,
+                Command::Time(t) => {
+                    self.clock.time = t;
+                    self.advance_motion(0.0, 0);
+                }
+                Command::Step(n) => self.advance_motion(0.0, n),
+                Command::Grab(on) => {
+                    if on != self.grabbed.is_some() {
+                        self.toggle_grab();
+                    }
+                }
             }
         }
         Ok(())
@@ -476,6 +563,45 @@ mod tests {
         assert!(!s.quit, "the screenshot's frame comes first");
         s.run_script().unwrap();
         assert!(s.quit);
+    }
+
+    #[test]
+    fn scripts_step_the_motion_and_a_grabbed_light_follows_the_camera() {
+        use crate::scene::motion::{LightMotion, LightPath};
+        let mut scene = builtin::default_scene();
+        let start = scene.lights[0].position;
+        scene.motion.lights.push(LightMotion {
+            light: 0,
+            path: LightPath::Orbit {
+                centre: start - glam::Vec3::X * 50.0,
+                start,
+                period: 4.0,
+            },
+            aim: None,
+            color: scene.lights[0].color,
+        });
+        let mut s = ViewerState::new(
+            scene,
+            Options::default(),
+            script::parse("play off\nstep 4\nstep -2\ngrab on\nwait 1\ncamera 0 0 100 0 0\n")
+                .unwrap(),
+        );
+        s.run_script().unwrap(); // the first frame
+        s.run_script().unwrap();
+        assert!(!s.clock.playing);
+        assert!((s.clock.time - 2.0 * MotionClock::STEP).abs() < 1e-12);
+        let moved = s.scene.lights[0].position;
+        assert!(moved.distance(start) > 1.0, "the light orbits");
+        // Grabbed, the light keeps its offset from the camera as the script moves it.
+        let offset = moved - s.camera.position;
+        s.run_script().unwrap(); // `wait 1`
+        s.run_script().unwrap(); // `camera`
+        assert_eq!(s.camera.position, glam::Vec3::new(0.0, 0.0, 100.0));
+        s.advance_camera(0.0);
+        assert!((s.scene.lights[0].position - (s.camera.position + offset)).length() < 1e-3);
+        // Paused, time does not run.
+        s.advance_motion(1.0, 0);
+        assert!((s.clock.time - 2.0 * MotionClock::STEP).abs() < 1e-12);
     }
 
     #[test]

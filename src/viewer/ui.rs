@@ -53,6 +53,14 @@ pub const HELP: &[(&str, &str)] = &[
         "record the camera path (again: stop and save camera-path.txt)",
     ),
     ("F10", "replay the last recorded path"),
+    (
+        "P / , / .",
+        "the scene's motion (players, moving lights): play or pause / step back / step on",
+    ),
+    (
+        "G",
+        "grab the selected light: it moves with the camera (G again drops it)",
+    ),
     ("F11", "vsync on or off"),
     ("F12", "screenshot of the window"),
     ("Esc", "quit"),
@@ -153,9 +161,53 @@ fn keys(ctx: &egui::Context, state: &mut ViewerState) {
         let file = state.next_screenshot();
         state.pending.push(Pending::Screenshot(file));
     }
+    if pressed(Key::P) {
+        state.clock.playing = !state.clock.playing;
+    }
+    if pressed(Key::Comma) {
+        state.clock.playing = false;
+        state.advance_motion(0.0, -1);
+    }
+    if pressed(Key::Period) {
+        state.clock.playing = false;
+        state.advance_motion(0.0, 1);
+    }
+    if pressed(Key::G) {
+        state.toggle_grab();
+    }
     if pressed(Key::Escape) {
         state.quit = true;
     }
+}
+
+/// The scene's motion: its time, play or pause, step.
+fn motion_panel(ui: &mut egui::Ui, state: &mut ViewerState) {
+    let m = &state.scene.motion;
+    ui.label(format!(
+        "Motion: {:.2} s · {} animated, {} walking, {} lights moving",
+        state.clock.time,
+        m.rigs.len(),
+        m.walks.len(),
+        m.lights.len()
+    ));
+    ui.horizontal(|ui| {
+        let label = if state.clock.playing {
+            "pause (P)"
+        } else {
+            "play (P)"
+        };
+        if ui.button(label).clicked() {
+            state.clock.playing = !state.clock.playing;
+        }
+        if ui.button("◀ step (,)").clicked() {
+            state.clock.playing = false;
+            state.advance_motion(0.0, -1);
+        }
+        if ui.button("step ▶ (.)").clicked() {
+            state.clock.playing = false;
+            state.advance_motion(0.0, 1);
+        }
+    });
 }
 
 /// Each light's running sampled error, the frame's and what the sampling cost.
@@ -654,6 +706,10 @@ pub fn draw(
                     ui.colored_label(Color32::LIGHT_YELLOW, &state.status);
                 }
                 ui.separator();
+                if !state.scene.motion.is_still() {
+                    motion_panel(ui, state);
+                    ui.separator();
+                }
                 light_panel(ui, state);
                 ui.separator();
                 view_panel(ui, state, depth_images);

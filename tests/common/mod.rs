@@ -223,6 +223,20 @@ impl Measurer {
         &mut self.renderer
     }
 
+    /// Poses the scene's motion at `t` seconds: the exact masks follow, and the reference is
+    /// built again when a model moved.
+    pub fn pose(&mut self, t: f64) -> shadowlab::scene::motion::Posed {
+        let posed = self.scene.pose_at(t);
+        if posed.reshaped.is_empty() && posed.moved.is_empty() {
+            self.exact.clear();
+        } else {
+            self.exact = shadowlab::truth::ExactMasks::with_reference(
+                shadowlab::truth::Reference::build(&self.scene),
+            );
+        }
+        posed
+    }
+
     /// Moves the camera (the exact masks follow it).
     pub fn set_camera(&mut self, camera: shadowlab::scene::Camera) {
         self.scene.camera = camera;
@@ -273,4 +287,90 @@ pub fn options_with(sets: &[&str]) -> Options {
         o.set_assignment(s).unwrap_or_else(|e| panic!("{e}"));
     }
     o
+}
+
+/// Resident memory of this process.
+pub fn rss_bytes() -> u64 {
+    let statm = std::fs::read_to_string("/proc/self/statm").unwrap_or_default();
+    let pages: u64 = statm
+        .split_whitespace()
+        .nth(1)
+        .and_then(|p| p.parse().ok())
+        .unwrap_or(0);
+    pages * 4096
+}
+
+/// The next GL names the driver hands out for each object type (a leak makes them run away).
+pub fn gl_names(gl: &glow::Context) -> [u32; 4] {
+    use glow::HasContext;
+    // SAFETY: objects created and deleted at once, only to read the names GL assigns.
+    unsafe {
+        let t = gl.create_texture().unwrap();
+        let b = gl.create_buffer().unwrap();
+        let f = gl.create_framebuffer().unwrap();
+        let v = gl.create_vertex_array().unwrap();
+        let names = [t.0.get(), b.0.get(), f.0.get(), v.0.get()];
+        gl.delete_texture(t);
+        gl.delete_buffer(b);
+        gl.delete_framebuffer(f);
+        gl.delete_vertex_array(v);
+        names
+    }
+}
+
+/// Pixels whose decisions differ between two masks of one size.
+pub fn differing(a: &shadowlab::images::Mask, b: &shadowlab::images::Mask) -> usize {
+    a.values
+        .iter()
+        .zip(&b.values)
+        .filter(|(x, y)| x != y)
+        .count()
+}
+
+/// What a long run must hold flat: the next GL names of each object type and resident memory.
+#[derive(Debug, Clone, Copy)]
+pub struct Footprint {
+    names: [u32; 4],
+    rss: u64,
+}
+
+impl Footprint {
+    pub fn take(gl: &glow::Context) -> Footprint {
+        Footprint {
+            names: gl_names(gl),
+            rss: rss_bytes(),
+        }
+    }
+
+    /// GL names handed out since `before`, per object type.
+    pub fn names_since(&self, before: &Footprint) -> Vec<i64> {
+        before
+            .names
+            .iter()
+            .zip(&self.names)
+            .map(|(a, b)| *b as i64 - *a as i64)
+            .collect()
+    }
+
+    /// "RSS a -> b MiB" since `before`.
+    pub fn memory_since(&self, before: &Footprint) -> String {
+        format!("RSS {} -> {} MiB", before.rss >> 20, self.rss >> 20)
+    }
+
+    /// Fewer than 16 new names of any type (a leak of one object per frame makes thousands)
+    /// and under 32 MiB more memory (one leaked caster group or vertex copy per frame adds far
+    /// more over thousands of frames).
+    pub fn assert_flat_since(&self, before: &Footprint) {
+        let growth = self.names_since(before);
+        assert!(
+            growth.iter().all(|g| *g < 16),
+            "GL objects leak: {growth:?}"
+        );
+        assert!(
+            self.rss < before.rss + (32 << 20),
+            "memory grew from {} to {}",
+            before.rss,
+            self.rss
+        );
+    }
 }

@@ -79,9 +79,9 @@ pub fn samples_passed(gl: &glow::Context, draw: impl FnOnce()) -> Option<u64> {
 /// fragment counts once, whatever the counting would do with it).
 pub fn volume_fragments(
     ctx: &PassContext,
-    program: &Program,
+    programs: &stencil::VolumePrograms,
     volumes: &LightVolumes<'_>,
-    masked: bool,
+    (masked, light_scissor): (bool, Option<crate::plan::scissor::Scissor>),
 ) -> Option<u64> {
     let gl = ctx.gl;
     samples_passed(gl, || {
@@ -101,9 +101,7 @@ pub fn volume_fragments(
             gl.stencil_op(glow::KEEP, glow::KEEP, glow::KEEP);
             gl.stencil_mask(0);
         }
-        program.bind(gl);
-        program.set_mat4(gl, "u_view_proj", &ctx.plan.camera.view_proj);
-        stencil::draw_all_parts(gl, program, volumes);
+        stencil::draw_all_parts(ctx, programs, volumes, light_scissor);
         // SAFETY: back to the passes' defaults.
         unsafe {
             gl.enable(glow::DEPTH_TEST);

@@ -16,9 +16,12 @@ use super::state::DrawState;
 use crate::gl::depth_bounds_ext::{self, DepthBoundsExt};
 use crate::gl::program::{Program, has_clip_distances};
 use crate::gl::volumes::LightVolumes;
-use crate::options::{ShadowVolumeOptions, StencilPasses, StencilWrap, VolumeProjection};
+use crate::options::{
+    ShadowVolumeOptions, StencilPasses, StencilWrap, VolumeCasters, VolumeProjection,
+};
 use crate::plan::depth_bounds::MAX_PLANES;
 use crate::plan::scissor::Scissor;
+use crate::shadow::extrusion::Role;
 use crate::shadow::volume::Counting;
 use glow::HasContext;
 
@@ -83,11 +86,79 @@ fn draw_parts(
     }
 }
 
-/// Every part of the light's volumes, whatever its counting, without depth bounds.
-pub fn draw_all_parts(gl: &glow::Context, program: &Program, v: &LightVolumes<'_>) {
-    for counting in [Counting::ZFail, Counting::ZPass] {
-        draw_parts(gl, program, v, counting, None);
+/// The light's groups the GPU extrudes that count `counting`: sides, and caps for depth-fail.
+fn draw_extruded(
+    ctx: &PassContext,
+    program: &Program,
+    v: &LightVolumes<'_>,
+    counting: Counting,
+    light_scissor: Option<Scissor>,
+) {
+    let gl = ctx.gl;
+    let o = &ctx.options.shadow_volume;
+    let mut drawn = v
+        .extruded
+        .iter()
+        .filter(|d| d.counting == counting)
+        .peekable();
+    if drawn.peek().is_none() {
+        return;
     }
+    // The built parts' rectangles are theirs; these volumes get the light's.
+    super::set_scissor(gl, light_scissor);
+    program.bind(gl);
+    program.set_mat4(gl, "u_view_proj", &ctx.plan.camera.view_proj);
+    program.set_f32(gl, "u_epsilon", o.facing_epsilon);
+    program.set_i32(
+        gl,
+        "u_two_sided",
+        i32::from(o.casters == VolumeCasters::Both),
+    );
+    let roles: &[Role] = match counting {
+        Counting::ZFail => &[Role::Sides, Role::FrontCap, Role::BackCap],
+        Counting::ZPass => &[Role::Sides],
+    };
+    for d in drawn {
+        program.set_mat4(gl, "u_model", &d.model);
+        program.set_vec3(gl, "u_light", d.light);
+        // SAFETY: the group's own vertex array; ranges lie inside its index buffer.
+        unsafe {
+            gl.bind_vertex_array(Some(d.vao));
+            for &role in roles {
+                let (first, count) = d.range(role);
+                program.set_i32(gl, "u_role", role.code());
+                gl.draw_elements(glow::TRIANGLES, count, glow::UNSIGNED_INT, first * 4);
+            }
+            gl.bind_vertex_array(None);
+        }
+    }
+}
+
+/// The two volume programs: built on the CPU (`shaders/volume.vert`) and extruded on the GPU
+/// (`shaders/volume_gpu.vert`).
+pub struct VolumePrograms {
+    pub built: Program,
+    pub extruded: Program,
+}
+
+/// Every part of the light's volumes, whatever its counting, without depth bounds.
+pub fn draw_all_parts(
+    ctx: &PassContext,
+    programs: &VolumePrograms,
+    v: &LightVolumes<'_>,
+    light_scissor: Option<Scissor>,
+) {
+    for counting in [Counting::ZFail, Counting::ZPass] {
+        programs.built.bind(ctx.gl);
+        program_camera(ctx, &programs.built);
+        draw_parts(ctx.gl, &programs.built, v, counting, None);
+        draw_extruded(ctx, &programs.extruded, v, counting, light_scissor);
+    }
+    super::set_scissor(ctx.gl, light_scissor);
+}
+
+fn program_camera(ctx: &PassContext, program: &Program) {
+    program.set_mat4(ctx.gl, "u_view_proj", &ctx.plan.camera.view_proj);
 }
 
 /// Clears the stencil and counts the light's volumes into it. Parts with a rectangle of their
@@ -96,7 +167,7 @@ pub fn draw_all_parts(gl: &glow::Context, program: &Program, v: &LightVolumes<'_
 /// to its count bits where its mask bit is clear (`passes::hybrid`).
 pub fn draw(
     ctx: &PassContext,
-    program: &Program,
+    programs: &VolumePrograms,
     volumes: &LightVolumes<'_>,
     light_scissor: Option<Scissor>,
     masked: bool,
@@ -129,10 +200,17 @@ pub fn draw(
         .any(|d| d.depth_bounds.is_some())
         .then(depth_bounds_ext::current)
         .flatten();
-    program.bind(gl);
-    program.set_mat4(gl, "u_view_proj", &ctx.plan.camera.view_proj);
     count(gl, volumes, ctx.plan.stencil, o.wrap, |counting| {
-        draw_parts(gl, program, volumes, counting, bounds)
+        let program = &programs.built;
+        program.bind(gl);
+        program_camera(ctx, program);
+        draw_parts(gl, program, volumes, counting, bounds);
+        if let Some(ext) = bounds.filter(|_| !volumes.extruded.is_empty()) {
+            // SAFETY: the entry point exists (the probe found it); the extruded volumes have
+            // no depth range of their own.
+            unsafe { ext.disable(gl) };
+        }
+        draw_extruded(ctx, &programs.extruded, volumes, counting, light_scissor);
     });
     super::set_scissor(gl, light_scissor);
     // SAFETY: state reset for the lit pass; only what was enabled (ES may lack the switch).
@@ -192,7 +270,7 @@ pub fn count(
 ) {
     let (incr, decr) = ops(wrap, passes);
     for counting in [Counting::ZFail, Counting::ZPass] {
-        if !volumes.draws.iter().any(|d| d.counting == counting) {
+        if !volumes.counts(counting) {
             continue;
         }
         let (incr_face, decr_face) = match counting {
