@@ -185,6 +185,37 @@ fn an_animated_player_shadow_matches_the_exact_reference_on_every_frame() {
     assert!(sv.iter().skip(1).all(|(_, _, built)| *built >= 1), "{sv:?}");
 }
 
+#[test]
+fn volumes_hold_with_the_camera_inside_the_running_player() {
+    // oa_dm3's flythrough walks through sarge at frame 448: the eye inside a closed caster,
+    // whose inner faces are culled. The planner's near-plane split counted the rest of him
+    // depth-pass and lost light rt2's shadow of him: 16.8% of rt2's receivers wrong.
+    let (mut scene, _, _) = load_scene_file("oa_dm3");
+    let keys = path::read(
+        &std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/paths/oa_dm3.path"),
+    )
+    .unwrap();
+    scene.camera = keys[448].apply(&scene.camera);
+    scene.pose_at(448.0 / FRAME_RATE_HZ);
+    let rt2 = scene.lights.iter().position(|l| l.name == "rt2").unwrap();
+    let options = options_with(&[
+        SV,
+        "width=320",
+        "height=240",
+        &format!("lighting.only={rt2}"),
+    ]);
+    let mut m = Measurer::new(scene, &options);
+    let r = m.measure(&options);
+    let rates = r.light(rt2).rates();
+    println!("rt2 inside sarge: {:.4}% wrong", 100.0 * rates.total);
+    assert!(rates.receiver_pixels > 1000, "rt2 lights the view");
+    assert!(
+        rates.total_excl_boundary < 0.0005,
+        "{:.3}% wrong",
+        100.0 * rates.total_excl_boundary
+    );
+}
+
 /// Options with every cache the renderer keeps across frames off.
 fn caches_off(options: &Options) -> Options {
     let mut o = options.clone();

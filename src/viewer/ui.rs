@@ -199,11 +199,11 @@ fn motion_panel(ui: &mut egui::Ui, state: &mut ViewerState) {
         if ui.button(label).clicked() {
             state.clock.playing = !state.clock.playing;
         }
-        if ui.button("◀ step (,)").clicked() {
+        if ui.button("step back (,)").clicked() {
             state.clock.playing = false;
             state.advance_motion(0.0, -1);
         }
-        if ui.button("step ▶ (.)").clicked() {
+        if ui.button("step on (.)").clicked() {
             state.clock.playing = false;
             state.advance_motion(0.0, 1);
         }
