@@ -4,7 +4,7 @@
 
 mod common;
 
-use common::{Footprint, Measurer, differing, load_scene_file, options_with, test_options};
+use common::{Footprint, Measurer, differing, load_scene_file, options_with};
 use shadowlab::gl::FrameRequest;
 use shadowlab::options::Options;
 use shadowlab::q3::md3;
@@ -330,20 +330,10 @@ fn ten_thousand_frames_in_motion_stay_flat() {
         &std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/paths/oa_dm1.path"),
     )
     .unwrap();
-    let mut options = test_options();
-    options.set("width", "64").unwrap();
-    options.set("height", "48").unwrap();
-    options.set("shadow_map.size", "256").unwrap();
-    let sm = {
-        let mut o = options.clone();
-        o.set("technique", "shadow_map").unwrap();
-        o
-    };
-    let sv = {
-        let mut o = options.clone();
-        o.set("technique", "shadow_volume").unwrap();
-        o
-    };
+    let small = ["width=64", "height=48", "shadow_map.size=256"];
+    let options = options_with(&small);
+    let sm = options_with(&[&small[..], &[SM]].concat());
+    let sv = options_with(&[&small[..], &[SV]].concat());
     let mut m = Measurer::new(scene, &options);
     let first = |m: &mut Measurer| {
         m.pose(0.0);

@@ -72,7 +72,8 @@ pub fn run(common: &CommonArgs, args: &Args) -> Result<()> {
         .map(|s| parse_sweep(s))
         .collect::<Result<_>>()?;
     let loaded = load(common, args.scene.as_deref())?;
-    let (scene, mut options) = (loaded.scene.clone(), loaded.options.clone());
+    let flythrough = loaded.report.flythrough;
+    let (scene, mut options) = (loaded.scene, loaded.options);
     // Sweeping one technique's options without choosing it would measure nothing: pick it.
     if options.technique == Technique::None && !sweeps.iter().any(|(k, _)| k == "technique") {
         let implied = Technique::ALL.iter().copied().find(|t| {
@@ -86,7 +87,6 @@ pub fn run(common: &CommonArgs, args: &Args) -> Result<()> {
         }
     }
     let configs = sweep_configs(&options, &sweeps)?;
-    let flythrough = loaded.report.flythrough.clone();
     let path = match args.path.as_deref() {
         Some("still") => None,
         Some(p) => Some(p.to_string()),

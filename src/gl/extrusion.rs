@@ -3,6 +3,7 @@
 //! the lights do. The stencil pass draws them with `shaders/volume_gpu.vert`.
 
 use super::upload::{Plain, buffer_data};
+use super::volumes::Buffers;
 use crate::shadow::extrusion::{ExtrusionMesh, ExtrusionVertex, Role};
 use crate::shadow::volume::{CasterGroup, Counting};
 use glam::{Mat4, Vec3};
@@ -13,9 +14,7 @@ impl Plain for ExtrusionVertex {}
 
 /// One group's mesh on the GPU.
 struct Uploaded {
-    vao: glow::VertexArray,
-    vbo: glow::Buffer,
-    ebo: glow::Buffer,
+    buffers: Buffers,
     /// What it was built from: the owner's pose, whether sides are doubled (two-sided), and
     /// the triangle count (a new scene's group of the same index differs).
     built_from: (u64, bool, usize),
@@ -101,36 +100,32 @@ impl Extrusions {
             ranges[k] = (indices.len() as i32, list.len() as i32);
             indices.extend_from_slice(list);
         }
-        let existing = self.groups.remove(&index);
-        // SAFETY: a vertex array and two buffers of our own (the old ones reused), filled
-        // from plain data; the index buffer is bound while the array is, so it keeps it.
-        let uploaded = unsafe {
-            let (vao, vbo, ebo) = match existing {
-                Some(u) => (u.vao, u.vbo, u.ebo),
-                None => (
-                    gl.create_vertex_array()?,
-                    gl.create_buffer()?,
-                    gl.create_buffer()?,
-                ),
-            };
-            gl.bind_vertex_array(Some(vao));
-            gl.bind_buffer(glow::ARRAY_BUFFER, Some(vbo));
+        // The old buffers are filled again.
+        let buffers = match self.groups.remove(&index) {
+            Some(u) => u.buffers,
+            None => Buffers::new(gl)?,
+        };
+        // SAFETY: our own buffers, filled from plain data; the index buffer is bound while
+        // the array is, so it keeps it.
+        unsafe {
+            gl.bind_vertex_array(Some(buffers.vao));
+            gl.bind_buffer(glow::ARRAY_BUFFER, Some(buffers.vbo));
             buffer_data(gl, glow::ARRAY_BUFFER, &mesh.vertices, glow::DYNAMIC_DRAW);
             attributes(gl);
-            gl.bind_buffer(glow::ELEMENT_ARRAY_BUFFER, Some(ebo));
+            gl.bind_buffer(glow::ELEMENT_ARRAY_BUFFER, Some(buffers.ebo));
             buffer_data(gl, glow::ELEMENT_ARRAY_BUFFER, &indices, glow::DYNAMIC_DRAW);
             gl.bind_vertex_array(None);
             gl.bind_buffer(glow::ARRAY_BUFFER, None);
             gl.bind_buffer(glow::ELEMENT_ARRAY_BUFFER, None);
+        }
+        self.groups.insert(
+            index,
             Uploaded {
-                vao,
-                vbo,
-                ebo,
+                buffers,
                 built_from,
                 ranges,
-            }
-        };
-        self.groups.insert(index, uploaded);
+            },
+        );
         Ok(true)
     }
 
@@ -144,7 +139,7 @@ impl Extrusions {
     ) -> Option<ExtrudedDraw> {
         let u = self.groups.get(&index)?;
         Some(ExtrudedDraw {
-            vao: u.vao,
+            vao: u.buffers.vao,
             model,
             light: model.inverse().transform_point3(light_world),
             counting,
@@ -152,19 +147,9 @@ impl Extrusions {
         })
     }
 
-    /// GL objects held, for leak checks.
-    pub fn object_count(&self) -> usize {
-        self.groups.len() * 3
-    }
-
     pub fn delete(&mut self, gl: &glow::Context) {
         for (_, u) in self.groups.drain() {
-            // SAFETY: our own objects, deleted once.
-            unsafe {
-                gl.delete_vertex_array(u.vao);
-                gl.delete_buffer(u.vbo);
-                gl.delete_buffer(u.ebo);
-            }
+            u.buffers.delete(gl);
         }
     }
 }

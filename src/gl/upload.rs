@@ -205,14 +205,9 @@ impl GpuScene {
             if model.pose == *pose || run.start == run.end || run.end > scene.vertices.len() {
                 continue;
             }
-            let data = &scene.vertices[run.clone()];
-            // SAFETY: Vertex is plain data (see `Plain`); the run lies inside the buffer, which
-            // holds every scene vertex.
+            let bytes = bytes_of(&scene.vertices[run.clone()]);
+            // SAFETY: the run lies inside the buffer, which holds every scene vertex.
             unsafe {
-                let bytes = std::slice::from_raw_parts(
-                    data.as_ptr() as *const u8,
-                    std::mem::size_of_val(data),
-                );
                 gl.bind_buffer(glow::ARRAY_BUFFER, Some(self.vbo));
                 let offset = (run.start * std::mem::size_of::<Vertex>()) as i32;
                 gl.buffer_sub_data_u8_slice(glow::ARRAY_BUFFER, offset, bytes);
@@ -297,12 +292,14 @@ impl Plain for u32 {}
 impl Plain for [f32; 4] {}
 impl Plain for Vertex {}
 
+/// `data` as the bytes a GL buffer takes.
+fn bytes_of<T: Plain>(data: &[T]) -> &[u8] {
+    // SAFETY: T has no padding (see `Plain`), so every byte of the slice is initialised.
+    unsafe { std::slice::from_raw_parts(data.as_ptr() as *const u8, std::mem::size_of_val(data)) }
+}
+
 /// Fills the buffer bound to `target` with `data`.
 pub(crate) fn buffer_data<T: Plain>(gl: &glow::Context, target: u32, data: &[T], usage: u32) {
-    // SAFETY: T has no padding (see `Plain`), so every byte of the slice is initialised.
-    unsafe {
-        let bytes =
-            std::slice::from_raw_parts(data.as_ptr() as *const u8, std::mem::size_of_val(data));
-        gl.buffer_data_u8_slice(target, bytes, usage);
-    }
+    // SAFETY: a plain upload into the bound buffer.
+    unsafe { gl.buffer_data_u8_slice(target, bytes_of(data), usage) }
 }

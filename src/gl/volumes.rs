@@ -7,11 +7,34 @@ use crate::plan::volume_draws::{LightVolumeDraws, PartRange, VolumeDraw};
 use glow::HasContext;
 use std::collections::HashMap;
 
-/// One light's vertex array, vertex buffer and index buffer.
-struct Buffers {
-    vao: glow::VertexArray,
-    vbo: glow::Buffer,
-    ebo: glow::Buffer,
+/// A vertex array with its vertex buffer and index buffer: one light's volumes here, one
+/// caster group's extrusion mesh in `gl::extrusion`.
+pub(crate) struct Buffers {
+    pub vao: glow::VertexArray,
+    pub vbo: glow::Buffer,
+    pub ebo: glow::Buffer,
+}
+
+impl Buffers {
+    pub fn new(gl: &glow::Context) -> Result<Buffers, String> {
+        // SAFETY: a vertex array and two buffers of our own.
+        unsafe {
+            Ok(Buffers {
+                vao: gl.create_vertex_array()?,
+                vbo: gl.create_buffer()?,
+                ebo: gl.create_buffer()?,
+            })
+        }
+    }
+
+    pub fn delete(&self, gl: &glow::Context) {
+        // SAFETY: our own objects, deleted once (their owner is dropped with them).
+        unsafe {
+            gl.delete_vertex_array(self.vao);
+            gl.delete_buffer(self.vbo);
+            gl.delete_buffer(self.ebo);
+        }
+    }
 }
 
 /// A light's volume draws with the vertex array they read.
@@ -46,17 +69,7 @@ impl VolumeBuffers {
     pub fn upload(&mut self, gl: &glow::Context, draws: &LightVolumeDraws) -> Result<(), String> {
         let b = match self.lights.entry(draws.light) {
             std::collections::hash_map::Entry::Occupied(e) => e.into_mut(),
-            std::collections::hash_map::Entry::Vacant(e) => {
-                // SAFETY: a vertex array and two buffers of our own, kept for this light.
-                let (vao, vbo, ebo) = unsafe {
-                    (
-                        gl.create_vertex_array()?,
-                        gl.create_buffer()?,
-                        gl.create_buffer()?,
-                    )
-                };
-                e.insert(Buffers { vao, vbo, ebo })
-            }
+            std::collections::hash_map::Entry::Vacant(e) => e.insert(Buffers::new(gl)?),
         };
         if let Some(vertices) = &draws.upload.vertices {
             // SAFETY: uploads plain f32 vertices; attribute 0 is a vec4 position.
@@ -107,12 +120,7 @@ impl VolumeBuffers {
 
     pub fn delete(&mut self, gl: &glow::Context) {
         for (_, b) in self.lights.drain() {
-            // SAFETY: our own objects, deleted once.
-            unsafe {
-                gl.delete_vertex_array(b.vao);
-                gl.delete_buffer(b.vbo);
-                gl.delete_buffer(b.ebo);
-            }
+            b.delete(gl);
         }
     }
 }

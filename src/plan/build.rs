@@ -729,20 +729,22 @@ impl FrameFacts<'_> {
             GpuExtrusion::All => true,
         };
         // The shader extrudes to infinity only, and needs the shader pipeline.
-        if o.shadow_volume.extrusion != volume::Extrusion::Infinite
+        if o.shadow_volume.gpu_extrusion == GpuExtrusion::None
+            || o.shadow_volume.extrusion != volume::Extrusion::Infinite
             || o.gl.pipeline == Pipeline::FixedFunction
         {
             return;
         }
-        let owner_of = |group: usize| {
-            self.pieces
-                .iter()
-                .find(|(g, ..)| *g == group)
-                .map(|(_, _, _, g)| g.owner)
-        };
+        // The groups handed over, by index (pieces list each group's pieces in a run).
+        let mut extruded_groups: Vec<usize> = Vec::new();
+        for &(group, _, _, g) in &self.pieces {
+            if gpu(g.owner) && extruded_groups.last() != Some(&group) {
+                extruded_groups.push(group);
+            }
+        }
         let mut kept = Vec::with_capacity(plan.volumes.len());
         for part in std::mem::take(&mut plan.volumes) {
-            if !owner_of(part.group).is_some_and(gpu) {
+            if !extruded_groups.contains(&part.group) {
                 kept.push(part);
                 continue;
             }
@@ -784,10 +786,11 @@ impl FrameFacts<'_> {
         let open = g.piece(piece).open && p.open_depth_fail;
         let see_through = g.piece(piece).alpha_tested || open;
         let boxed = volume::potentially_inside_shadow(bounds, self.camera.position, pos, self.near);
-        // The eye within a closed piece's box (grown by the near distance): it may stand inside
-        // the caster, whose inner faces are culled, so that rays leave it through its lit faces into
-        // the volume, past the front cap depth-pass does not draw, whatever the near plane
-        // holds (oa_dm3's flythrough walks through the running player: 16% wrong at frame 448).
+        // The eye within a closed piece's box (grown by the near distance): it may stand
+        // inside the caster, whose inner faces are culled, so that rays leave it through its
+        // lit faces into the volume, past the front cap depth-pass does not draw, whatever the
+        // near plane holds (oa_dm3's flythrough walked through the running player: 16% wrong
+        // at frame 448).
         let eye_in_box = !g.piece(piece).open && {
             let e = self.camera.position;
             let grown = self.near;

@@ -21,8 +21,8 @@ use std::sync::Arc;
 /// Everything the base pass's depth is drawn from, so that a frame with the same as the last
 /// one has the same depth without reading it back (`plan.reuse_depth`): the camera (view,
 /// projection, size), which surfaces are drawn, where the models stand and their poses, the
-/// depth format and the form it is read in. Materials, textures and geometry are the loaded scene's, which a
-/// new scene replaces together with the depth kept ([`Planner::forget`]).
+/// depth format and the form it is read in. Materials, textures and geometry are the loaded
+/// scene's, which a new scene replaces together with the depth kept ([`Planner::forget`]).
 #[derive(Debug, Clone, PartialEq)]
 struct DepthInputs {
     camera: CameraSetup,

@@ -52,12 +52,11 @@ pub struct BenchSettings {
 }
 
 impl BenchSettings {
-    /// The time frame `i` of the path is posed at.
-    pub fn time_of(&self, i: usize) -> f64 {
+    /// Poses `scene` for frame `i` of the path, at `i / FRAME_RATE_HZ` seconds; without
+    /// `motion` it stays as loaded.
+    fn pose(&self, scene: &mut Scene, i: usize) {
         if self.motion {
-            i as f64 / crate::scene::path::FRAME_RATE_HZ
-        } else {
-            0.0
+            scene.pose_at(i as f64 / crate::scene::path::FRAME_RATE_HZ);
         }
     }
 
@@ -459,7 +458,7 @@ fn pass_breakdown(
         0
     };
     for i in 0..frames {
-        scene.pose_at(settings.time_of(i));
+        settings.pose(scene, i);
         let camera = settings.camera(scene, i);
         let f = renderer.render_at(scene, &camera, options, FrameRequest::default())?;
         for (name, ms) in pass_totals(&f) {
@@ -525,7 +524,7 @@ impl<'a> Bench<'a> {
 
     fn measure(&mut self, options: &Options) -> Result<Measured, RenderError> {
         let (scene, settings) = (&mut self.scene, &self.settings);
-        scene.pose_at(settings.time_of(0));
+        settings.pose(scene, 0);
         for _ in 0..settings.warmup {
             let camera = settings.camera(scene, 0);
             self.renderer
@@ -534,7 +533,7 @@ impl<'a> Bench<'a> {
         let mut frame_ms = Vec::new();
         let mut redone = Redone::default();
         for i in 0..settings.frames.max(1) {
-            scene.pose_at(settings.time_of(i));
+            settings.pose(scene, i);
             let camera = settings.camera(scene, i);
             let (ms, cache) = time_frame(self.renderer, scene, &camera, options)?;
             frame_ms.push(ms);
@@ -567,7 +566,7 @@ impl<'a> Bench<'a> {
         }
         bar.set_message(format!("{} option sets, round-robin", timed.len()));
         let mut renderers = Vec::with_capacity(timed.len());
-        scene.pose_at(settings.time_of(0));
+        settings.pose(scene, 0);
         let first = settings.camera(scene, 0);
         for (_, o) in &timed {
             let mut r = self.renderer.sibling(o.width, o.height)?;
@@ -581,7 +580,7 @@ impl<'a> Bench<'a> {
         let mut redone = vec![Redone::default(); timed.len()];
         for i in 0..settings.frames.max(1) {
             // Every configuration draws the same posed frame.
-            scene.pose_at(settings.time_of(i));
+            settings.pose(scene, i);
             let camera = settings.camera(scene, i);
             for k in 0..timed.len() {
                 let j = (k + i) % timed.len();
@@ -629,7 +628,7 @@ impl<'a> Bench<'a> {
     /// The first frame of the path with `options`, compared with the exact reference.
     pub fn capture(&mut self, options: &Options) -> Result<Capture, RenderError> {
         // The exact masks kept are those of the first frame, posed at its time.
-        self.scene.pose_at(self.settings.time_of(0));
+        self.settings.pose(&mut self.scene, 0);
         let camera = self.settings.camera(&self.scene, 0);
         let frame = self.renderer.render_at(
             &self.scene,
@@ -660,7 +659,7 @@ impl<'a> Bench<'a> {
         let mut out = Vec::with_capacity(self.settings.frames);
         let moving = self.settings.motion && !self.scene.motion.is_still();
         for i in (0..self.settings.frames.max(1)).step_by(self.settings.sample_every.max(1)) {
-            self.scene.pose_at(self.settings.time_of(i));
+            self.settings.pose(&mut self.scene, i);
             let camera = self.settings.camera(&self.scene, i);
             // A moving scene's casters are where this frame put them: a reference of its
             // own, built again when a model moved (untimed, like the rest of the sampling).

@@ -8,7 +8,7 @@
 //! downstream (caster groups, shadow maps, volume parts, the GPU's vertices) redo what a model or
 //! light touches and keep the rest.
 
-use super::{LightKind, Scene, SurfaceOwner};
+use super::{LightKind, Scene};
 use glam::{Mat4, Vec3};
 use std::sync::Arc;
 
@@ -419,31 +419,12 @@ impl Motion {
         }
         posed
     }
-
-    /// The models a motion moves (rigs and walks).
-    pub fn moving_models(&self) -> Vec<usize> {
-        let mut m: Vec<usize> = self.rigs.iter().map(|r| r.model).collect();
-        m.extend(self.walks.iter().map(|w| w.model));
-        m.sort_unstable();
-        m.dedup();
-        m
-    }
-}
-
-/// Surfaces of model `m`.
-pub fn model_surfaces(scene: &Scene, m: usize) -> impl Iterator<Item = usize> + '_ {
-    scene
-        .surfaces
-        .iter()
-        .enumerate()
-        .filter(move |(_, s)| s.owner == SurfaceOwner::Model(m))
-        .map(|(i, _)| i)
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::scene::{ModelInstance, SurfaceKind, Vertex};
+    use crate::scene::{ModelInstance, SurfaceKind, SurfaceOwner, Vertex};
 
     fn clip(first: u32, frames: u32, looping: u32, fps: f32) -> Clip {
         Clip {

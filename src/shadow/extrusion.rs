@@ -244,14 +244,17 @@ mod tests {
     use crate::scene::shapes::cuboid;
     use crate::shadow::volume::{EdgeRule, Extrusion, VolumeSettings, build_volume};
 
-    fn cube_group() -> CasterGroup {
+    /// The triangles of a cube from -1 to 1.
+    fn cube_triangles() -> Vec<[Vec3; 3]> {
         let m = cuboid(Vec3::splat(-1.0), Vec3::splat(1.0), 1.0);
-        let tris = m
-            .indices
+        m.indices
             .chunks_exact(3)
             .map(|t| [0, 1, 2].map(|k| m.vertices[t[k] as usize].pos()))
-            .collect();
-        CasterGroup::build(SurfaceOwner::World, tris)
+            .collect()
+    }
+
+    fn cube_group() -> CasterGroup {
+        CasterGroup::build(SurfaceOwner::World, cube_triangles())
     }
 
     /// The triangles a role draws, without those that collapsed (zero area in every view).
@@ -289,13 +292,8 @@ mod tests {
 
     /// An open box (a cube less its top face): a caster with open edges.
     fn open_box_group() -> CasterGroup {
-        let m = cuboid(Vec3::splat(-1.0), Vec3::splat(1.0), 1.0);
-        let tris = m
-            .indices
-            .chunks_exact(3)
-            .map(|t| [0, 1, 2].map(|k| m.vertices[t[k] as usize].pos()))
-            .filter(|t: &[Vec3; 3]| !t.iter().all(|p| p.z == 1.0))
-            .collect();
+        let mut tris = cube_triangles();
+        tris.retain(|t| !t.iter().all(|p| p.z == 1.0));
         CasterGroup::build(SurfaceOwner::World, tris)
     }
 
