@@ -23,3 +23,22 @@ bool light_reaches(vec3 p, vec3 n, vec3 light_pos, vec3 spot_dir, float cos_cuto
     if (cos_cutoff > -1.0 && dot(-to_light / dist, spot_dir) <= cos_cutoff) return false;
     return true;
 }
+
+#if defined(ID_TABLE) && defined(FRAGMENT_STAGE)
+// Per-triangle table of ID and priority buffers (gl/id_tables.rs): row-major, 1024 texels a
+// row, at the triangle's place in the GPU index buffer.
+uniform sampler2D u_table;
+uniform int u_tri_base;
+vec4 table_entry() {
+    int t = u_tri_base + gl_PrimitiveID;
+    return texelFetch(u_table, ivec2(t % 1024, t / 1024), 0);
+}
+// An ID as RGBA8 bytes, low byte in red.
+vec4 id_colour(uint id) {
+    return vec4(float(id & 255u), float((id >> 8) & 255u), float((id >> 16) & 255u), float(id >> 24)) / 255.0;
+}
+uint colour_id(vec4 c) {
+    uvec4 b = uvec4(round(c * 255.0));
+    return b.r | (b.g << 8) | (b.b << 16) | (b.a << 24);
+}
+#endif

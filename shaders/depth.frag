@@ -9,8 +9,29 @@ in vec2 v_depth;
 // format's resolution), added here as the GL would.
 uniform vec2 u_offset;
 #endif
+#ifdef ID_TABLE
+// ID and priority buffers (shadow_map.buffer): the triangle's entry of the table
+// (gl/id_tables.rs). No polygon offset: the written value is the unit's, not a depth.
+in vec3 v_world;
+uniform vec3 u_light_pos;
+#ifdef BUFFER_ID
+// The ID as four bytes of colour, modulo 2^u_id_bits (as a narrower channel would keep it).
+out vec4 o_id;
+uniform uint u_id_mask;
+#endif
+#endif
 void main() {
     if (u_alpha_func != 0 && !q3_alpha_passes(u_alpha_func, texture(u_texture, v_uv).a)) discard;
+#ifdef ID_TABLE
+    vec4 e = table_entry();
+#ifdef BUFFER_ID
+    o_id = id_colour(uint(e.x) & u_id_mask);
+#elif defined(BUFFER_PRIORITY)
+    gl_FragDepth = e.x + 0.5 * e.y;
+#else
+    gl_FragDepth = e.x + e.y * clamp((distance(v_world, u_light_pos) - e.z) * e.w, 0.0, 1.0);
+#endif
+#endif
 #ifdef WARP_DEPTH
     float d = 0.5 * v_depth.x / v_depth.y + 0.5;
     float slope = max(abs(dFdx(d)), abs(dFdy(d)));

@@ -6,6 +6,9 @@ uniform mat4 u_model;
 uniform mat4 u_view_proj; // world -> light clip
 
 out vec2 v_uv;
+#ifdef ID_TABLE
+out vec3 v_world;
+#endif
 
 #ifdef WARP_DEPTH
 // Trapezoidal maps: the depth written is this matrix's (the light's own view), not the warp's.
@@ -16,6 +19,9 @@ out vec2 v_depth;
 void main() {
     v_uv = a_uv;
     vec4 world = u_model * vec4(a_position, 1.0);
+#ifdef ID_TABLE
+    v_world = world.xyz;
+#endif
 #ifdef WARP_DEPTH
     v_depth = (u_depth_view_proj * world).zw;
 #endif

@@ -33,6 +33,9 @@ in vec2 v_shadow_refs[6];
 in vec2 v_shadow_ref;
 #endif
 #endif
+#ifdef BUFFER_PRIORITY_DEPTH
+uniform float u_priority_bias; // shadow_map.priority_bias
+#endif
 uniform int u_face;           // six-spot omni light: the cube face this pass lights; -1: all
 uniform int u_sm_alpha_func;  // glAlphaFunc emulation: 0 NEVER .. 7 ALWAYS (options AlphaTestFunc)
 uniform float u_sm_alpha_ref;
@@ -78,6 +81,16 @@ vec4 shadow_coords() {
 #endif
 #ifdef WARP_DEPTH
     stq.z = rq.y > 0.0 ? rq.x / rq.y * stq.w : -1.0;
+#endif
+#if defined(BUFFER_PRIORITY) || defined(BUFFER_PRIORITY_DEPTH)
+    // Priority buffers compare the fragment's unit, not its depth (shadow_map.buffer).
+    vec4 e = table_entry();
+#ifdef BUFFER_PRIORITY
+    float ref = e.x;
+#else
+    float ref = e.x + e.y * (clamp((distance(v_world, u_light_pos) - e.z) * e.w, 0.0, 1.0) - u_priority_bias);
+#endif
+    stq.z = ref * stq.w;
 #endif
     return stq;
 }
@@ -130,6 +143,9 @@ void main() {
 
     // Fraction of the light that reaches the fragment (1 without a shadow technique).
     float visibility = 1.0;
+#ifdef BUFFER_ID
+    g_my_id = uint(table_entry().x) & u_id_mask;
+#endif
 #ifdef SHADOW_MAP
 #ifdef HYBRID
     // At silhouette pixels the stencil test has decided (count zero): lit.

@@ -18,7 +18,7 @@ uniform samplerCubeShadow u_shadow_cube;
 #endif
 uniform vec2 u_cube_near_far;
 #else
-#ifdef COMPARE_SHADER
+#if defined(COMPARE_SHADER) || defined(BUFFER_ID)
 #define MAP_SAMPLER sampler2D
 #else
 #define MAP_SAMPLER sampler2DShadow
@@ -35,11 +35,20 @@ uniform MAP_SAMPLER u_shadow_map;
 #define MAP_CALL1(F, A) F(u_shadow_map, A)
 #define MAP_CALL2(F, A, B) F(u_shadow_map, A, B)
 #endif
-#ifdef COMPARE_SHADER
+#if defined(COMPARE_SHADER) || defined(BUFFER_ID)
 float map_depth(vec2 uv) { return MAP_CALL1(texture, uv).r; }
 float map_texel(ivec2 t) { return MAP_CALL2(texelFetch, t, 0).r; }
 #else
 float map_compare(vec3 c) { return MAP_CALL1(texture, c); }
+#endif
+#ifdef BUFFER_ID
+// ID buffers: the fragment's own ID (lit.frag sets it from the table) against the IDs stored.
+uint g_my_id = 0u;
+uniform uint u_id_mask;
+vec4 id_texel(ivec2 t) {
+    ivec2 last = ivec2(int(u_map_size) - 1);
+    return MAP_CALL2(texelFetch, clamp(t, ivec2(0), last), 0);
+}
 #endif
 #endif
 
@@ -54,7 +63,21 @@ float reference_depth(float r) {
 #ifndef SHADOW_CUBE
 // One compare at uv: 1 if the fragment is no farther than the stored depth (LEQUAL).
 float compare_at(vec2 uv, float ref) {
-#ifdef COMPARE_SHADER
+#ifdef BUFFER_ID
+    // Lit where the texel holds the fragment's own ID; with the edge filter, where any of
+    // the nine texels around it does (Forsyth's cure for edge acne).
+    ivec2 t = ivec2(floor(uv * u_map_size));
+#ifdef ID_EDGE_FILTER
+    for (int j = -1; j <= 1; j++) {
+        for (int i = -1; i <= 1; i++) {
+            if (colour_id(id_texel(t + ivec2(i, j))) == g_my_id) return 1.0;
+        }
+    }
+    return 0.0;
+#else
+    return colour_id(id_texel(t)) == g_my_id ? 1.0 : 0.0;
+#endif
+#elif defined(COMPARE_SHADER)
     return reference_depth(ref) <= map_depth(uv) ? 1.0 : 0.0;
 #else
     return map_compare(vec3(uv, ref));

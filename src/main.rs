@@ -33,6 +33,9 @@ enum Command {
     Check(commands::check::Args),
     /// Record a flythrough: a camera walking through a scene's map, as a path file.
     Flythrough(commands::flythrough::Args),
+    /// Subdivide each light's receivers into lit and shadowed fragments (Vector's light-volume
+    /// subdivision), kept on disk; `--check` compares it with the ray-cast reference.
+    Subdivide(commands::subdivide::Args),
     /// Regenerate the paper's figures and claims beside our measurements (index.html + .md).
     Reproduce(commands::reproduce::Args),
     /// Open the walkthrough viewer in a window (F1 for keys).
@@ -49,6 +52,7 @@ fn main() {
         Command::Info(a) => commands::info::run(&cli.common, &a),
         Command::Render(a) => commands::render::run(&cli.common, &a),
         Command::Flythrough(a) => commands::flythrough::run(&cli.common, &a),
+        Command::Subdivide(a) => commands::subdivide::run(&cli.common, &a),
         Command::Options(a) => commands::options::run(&a),
         Command::Inspect(a) => commands::inspect::run(&cli.common, &a),
         Command::Bench(a) => commands::bench::run(&cli.common, &a),

@@ -369,6 +369,18 @@ option_enum! {
     }
 }
 
+impl Options {
+    /// What `technique`'s maps store: `shadow_map.buffer` for standard maps; the warped maps
+    /// and the hybrid keep depth.
+    pub fn map_buffer(&self, technique: Technique) -> MapBuffer {
+        if technique == Technique::ShadowMap {
+            self.shadow_map.buffer
+        } else {
+            MapBuffer::Depth
+        }
+    }
+}
+
 impl Technique {
     /// Whether the technique draws shadow maps (its lit pass reads them).
     pub fn uses_maps(self) -> bool {
@@ -650,6 +662,41 @@ option_enum! {
 }
 
 option_enum! {
+    /// What a shadow map stores (Forsyth's slides; docs/id-buffers.md). Every kind but
+    /// `depth` needs gl_PrimitiveID in fragment shaders (not on ES 3.0, where `depth` is
+    /// used and the frame says so) and applies to standard maps (`technique = shadow_map`);
+    /// an omni light is then always six spot maps (`shadow_map.omni = cube` is not used).
+    pub enum MapBuffer {
+        /// Depth from the light, compared with the fragment's (the paper).
+        Depth = "depth",
+        /// The ID (`id_unit`) of the nearest surface, as colour: lit where the fragment's own
+        /// ID is stored. No bias; where two IDs meet, a texel of the neighbour falsely
+        /// shadows ("edge acne", cured by `id_edge_filter`).
+        Id = "id",
+        /// Priorities: the units (`id_unit`) sorted by their nearest distance from the light
+        /// and drawn at constant depths, nearest first; lit where no nearer unit covers the
+        /// texel. No bias; a wrong sort (interpenetrating or circular units) shadows wrongly.
+        Priority = "priority",
+        /// Hybrid priority and depth: each unit a range of depth by its priority, its own
+        /// distances from the light spread within it; the bias (`priority_bias`) is per unit,
+        /// a share of its own range, and there is no peter panning between units.
+        PriorityDepth = "priority_depth",
+    }
+}
+
+option_enum! {
+    /// What one ID of an ID or priority buffer stands for.
+    pub enum IdUnit {
+        /// A scene surface (a Quake 3 face, patch or model surface).
+        Surface = "surface",
+        /// A convex part of a caster group (`shadow::parts`): cannot shadow itself.
+        Part = "part",
+        /// A triangle (needs more than 8 bits of ID).
+        Triangle = "triangle",
+    }
+}
+
+option_enum! {
     /// Alpha-tested surfaces in the shadow map pass.
     pub enum AlphaCasters {
         /// The depth pass samples alpha and discards like the surface does.
@@ -912,6 +959,19 @@ define_options! {
         omni: OmniMode = OmniMode::SixSpots;
         /// Alpha-tested casters: alpha test in the depth pass, or drawn solid.
         alpha_casters: AlphaCasters = AlphaCasters::Test;
+        /// What the map stores: depth (the paper), IDs, priorities, or priorities with depth
+        /// (Forsyth's ID and priority buffers).
+        buffer: MapBuffer = MapBuffer::Depth;
+        /// What an ID or priority stands for: a surface, a convex part, or a triangle.
+        id_unit: IdUnit = IdUnit::Part;
+        /// Bits of an ID buffer's IDs: IDs are stored modulo 2^bits, as an 8-bit colour
+        /// channel would keep them (per-triangle IDs collide below 24).
+        id_bits: u32 = 32, in 8 ..= 32;
+        /// ID buffers: lit where the fragment's ID is stored at its texel or at any of the
+        /// eight around it (Forsyth's cure for edge acne; shrinks shadows by about a texel).
+        id_edge_filter: bool = false;
+        /// Hybrid priority and depth: the bias, as a share of each unit's own depth range.
+        priority_bias: f32 = 0.02, in 0.0 ..= 1.0;
         /// Where the texgen planes apply: eye coordinates as glTexGen does (the paper), or
         /// positions relative to the light with the planes composed in double precision.
         texgen: TexgenSpace = TexgenSpace::Light;

@@ -44,6 +44,7 @@ const PAPER: &[(&str, &str)] = &[
     ("shadow_map.omni", "six_spots"),
     ("shadow_map.cull", "front"),
     ("shadow_map.texgen", "eye_linear"),
+    ("shadow_map.buffer", "depth"),
     ("shadow_volume.casters", "front"),
     ("shadow_volume.counting", "zfail"),
     ("shadow_volume.stencil", "two_pass"),

@@ -11,7 +11,7 @@ const SM: &str = "technique=shadow_map";
 const SV: &str = "technique=shadow_volume";
 
 /// (feature, the options that need it, the fallback they must equal, options replaced)
-const CASES: [(&str, &[&str], &[&str], usize); 6] = [
+const CASES: [(&str, &[&str], &[&str], usize); 7] = [
     (
         "render_to_depth_texture",
         &[SM, "shadow_map.depth_source=fbo"],
@@ -55,6 +55,12 @@ const CASES: [(&str, &[&str], &[&str], usize); 6] = [
             "plan.one_pass_stencil=false",
         ],
         2,
+    ),
+    (
+        "primitive_id",
+        &[SM, "shadow_map.buffer=id"],
+        &[SM, "shadow_map.buffer=depth"],
+        1,
     ),
 ];
 

@@ -38,6 +38,10 @@ fn quick_report_measures_every_section_and_writes_it() {
         "claim-sv-lights",
         "sweep-oa_dm1",
         "frontier-oa_dm1",
+        "forsyth-buffers",
+        "forsyth-ids",
+        "forsyth-shootout",
+        "vector-subdivision",
     ] {
         let s = report
             .section(id)
@@ -92,5 +96,15 @@ fn quick_report_measures_every_section_and_writes_it() {
     let f13 = report.section("thesis-fig13-14").unwrap();
     assert!((0.05..1.0).contains(&f13.number("map_share_0")));
     assert!((0.05..1.0).contains(&f13.number("map_share_1")));
+    // Forsyth: the ID buffer needs no bias where the depth map without one is mostly acne.
+    let fb = report.section("forsyth-buffers").unwrap();
+    println!("forsyth buffers: {:?}", fb.numbers);
+    assert!(fb.number("depth_no_offset") > 0.3);
+    assert!(fb.number("id") < fb.number("depth_no_offset") / 100.0);
+    // Vector: the two exact references agree outside the boundary band (tests/subdivision.rs
+    // says which pixels may differ and why).
+    let v = report.section("vector-subdivision").unwrap();
+    println!("vector: {:?}", v.numbers);
+    assert!(v.number("disagreement_excl_boundary") < 0.0005);
     let _ = std::fs::remove_dir_all(&out);
 }

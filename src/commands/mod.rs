@@ -8,6 +8,7 @@ pub mod inspect;
 pub mod options;
 pub mod render;
 pub mod reproduce;
+pub mod subdivide;
 pub mod tune;
 #[cfg(feature = "window")]
 pub mod view;

@@ -391,6 +391,16 @@ pub fn probe(gl: &glow::Context, fb_depth_stencil: (i32, i32)) -> Caps {
         timer_detail,
         "CPU time around glFinish per pass",
     );
+    add(
+        "primitive_id",
+        !es,
+        if es {
+            "gl_PrimitiveID in fragment shaders (not in GLSL ES 3.00)".into()
+        } else {
+            "gl_PrimitiveID in fragment shaders (GLSL 1.50)".into()
+        },
+        "depth maps (shadow_map.buffer = depth)",
+    );
     let depth_tex = depth_texture_attachable(gl, glow::DEPTH_COMPONENT24, glow::UNSIGNED_INT);
     add(
         "render_to_depth_texture",

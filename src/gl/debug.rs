@@ -109,6 +109,48 @@ pub fn read_depth_texture(
     data
 }
 
+/// An ID buffer's texels (`shadow_map.buffer = id`) as colours: each ID a hue of its own (a
+/// multiplicative hash, so neighbouring IDs differ), texels no triangle wrote black.
+pub fn id_image(gl: &glow::Context, texture: glow::Texture, size: u32) -> Rgba {
+    let mut data = vec![0u8; (size * size * 4) as usize];
+    if readable(gl) {
+        // SAFETY: `data` holds size*size RGBA8 texels, the texture's level 0 is size x size RGBA8.
+        unsafe {
+            gl.active_texture(glow::TEXTURE0);
+            gl.bind_texture(glow::TEXTURE_2D, Some(texture));
+            gl.pixel_store_i32(glow::PACK_ALIGNMENT, 4);
+            gl.get_tex_image(
+                glow::TEXTURE_2D,
+                0,
+                glow::RGBA,
+                glow::UNSIGNED_BYTE,
+                glow::PixelPackData::Slice(Some(&mut data)),
+            );
+            gl.bind_texture(glow::TEXTURE_2D, None);
+        }
+    }
+    let mut out = Vec::with_capacity(data.len());
+    for texel in data.chunks_exact(4) {
+        let id = u32::from_le_bytes([texel[0], texel[1], texel[2], texel[3]]);
+        if id == u32::MAX {
+            out.extend_from_slice(&[0, 0, 0, 255]);
+        } else {
+            let h = id.wrapping_mul(0x9E37_79B9).to_le_bytes();
+            out.extend_from_slice(&[h[3] | 0x40, h[2] | 0x40, h[1] | 0x40, 255]);
+        }
+    }
+    let mut rows: Vec<u32> = out
+        .chunks_exact(4)
+        .map(|p| u32::from_le_bytes([p[0], p[1], p[2], p[3]]))
+        .collect();
+    flip_rows(&mut rows, size as usize);
+    Rgba {
+        width: size,
+        height: size,
+        data: rows.iter().flat_map(|p| p.to_le_bytes()).collect(),
+    }
+}
+
 fn bytes_of_mut(v: &mut [f32]) -> &mut [u8] {
     // SAFETY: f32 has no invalid bit patterns and u8 has alignment 1.
     unsafe { std::slice::from_raw_parts_mut(v.as_mut_ptr() as *mut u8, std::mem::size_of_val(v)) }

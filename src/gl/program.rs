@@ -115,6 +115,9 @@ impl Program {
         defines: &[&str],
     ) -> Result<Program, ProgramError> {
         let es = gl.version().is_embedded;
+        // FRAGMENT_STAGE: helpers only a fragment shader may hold (gl_PrimitiveID's).
+        let fragment_defines: Vec<&str> =
+            defines.iter().copied().chain(["FRAGMENT_STAGE"]).collect();
         let vs = compile(
             gl,
             name,
@@ -122,7 +125,12 @@ impl Program {
             &assemble(es, defines, vertex),
         )?;
         let fs = match fragment {
-            Some(f) => match compile(gl, name, glow::FRAGMENT_SHADER, &assemble(es, defines, f)) {
+            Some(f) => match compile(
+                gl,
+                name,
+                glow::FRAGMENT_SHADER,
+                &assemble(es, &fragment_defines, f),
+            ) {
                 Ok(s) => Some(s),
                 Err(e) => {
                     // SAFETY: deleting the shader compiled above.
@@ -216,6 +224,13 @@ impl Program {
             unsafe { gl.uniform_4_f32(Some(l), v.x, v.y, v.z, v.w) };
         }
     }
+    pub fn set_u32(&self, gl: &glow::Context, name: &str, v: u32) {
+        if let Some(l) = self.uniform(name) {
+            // SAFETY: as above.
+            unsafe { gl.uniform_1_u32(Some(l), v) };
+        }
+    }
+
     pub fn set_vec3(&self, gl: &glow::Context, name: &str, v: glam::Vec3) {
         if let Some(l) = self.uniform(name) {
             // SAFETY: as above.

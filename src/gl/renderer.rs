@@ -11,12 +11,13 @@ use super::debug;
 use super::depth_reduce::DepthReducer;
 use super::extrusion::{ExtrudedDraw, Extrusions};
 use super::fixed::{self, FixedFunction};
+use super::id_tables::IdTables;
 use super::legacy::Legacy;
 use super::passes::lit::{LitShadow, ShadowBinding};
 use super::passes::shadow_map::{DepthTarget, copies_from_frame, copy_depth};
 use super::passes::{self, PassContext, set_scissor};
 use super::program::{Program, ProgramError, sources};
-use super::shadow_maps::ShadowMaps;
+use super::shadow_maps::{MapKey, ShadowMaps};
 use super::target::{Framebuffer, GBufferTarget, MaskTarget};
 use super::timing::PassTimer;
 use super::upload::GpuScene;
@@ -26,8 +27,8 @@ use crate::frame::{Frame, HybridStats, Step, StepKind};
 use crate::geometry::projection::cube_face_view;
 use crate::images::{GBuffer, Mask, MaskValue, Rgba, StencilImage};
 use crate::options::{
-    Compare, CompareResult, DepthBits, Filter, Options, Outside, Pipeline, StencilPasses,
-    StencilWrap, Technique, VolumeShading,
+    Compare, CompareResult, DepthBits, Filter, MapBuffer, Options, Outside, Pipeline,
+    StencilPasses, StencilWrap, Technique, VolumeShading,
 };
 use crate::plan::auto::AutoMemory;
 use crate::plan::occlusion::DepthPyramid;
@@ -116,6 +117,8 @@ struct LastMap {
     light: usize,
     view: usize,
     texture: glow::Texture,
+    /// The ID buffer's colour, shown instead of the depth.
+    ids: Option<glow::Texture>,
     cube: bool,
     size: u32,
 }
@@ -130,8 +133,12 @@ fn lit_defines(options: &Options, v: LitVariant, texel_grid: bool) -> Vec<&'stat
         mask,
         hybrid,
         warp_depth,
+        buffer,
     } = v;
     let mut d = Vec::new();
+    if shadow_map {
+        d.extend(buffer_defines(buffer, options.shadow_map.id_edge_filter));
+    }
     if hybrid {
         d.push("HYBRID");
     }
@@ -177,6 +184,17 @@ fn lit_defines(options: &Options, v: LitVariant, texel_grid: bool) -> Vec<&'stat
     d
 }
 
+/// The `#define`s of an ID or priority buffer, for the depth and lit programs alike.
+fn buffer_defines(buffer: MapBuffer, edge_filter: bool) -> Vec<&'static str> {
+    match buffer {
+        MapBuffer::Depth => vec![],
+        MapBuffer::Id if edge_filter => vec!["ID_TABLE", "BUFFER_ID", "ID_EDGE_FILTER"],
+        MapBuffer::Id => vec!["ID_TABLE", "BUFFER_ID"],
+        MapBuffer::Priority => vec!["ID_TABLE", "BUFFER_PRIORITY"],
+        MapBuffer::PriorityDepth => vec!["ID_TABLE", "BUFFER_PRIORITY_DEPTH"],
+    }
+}
+
 /// Which lit program a pass needs.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
 struct LitVariant {
@@ -192,6 +210,8 @@ struct LitVariant {
     hybrid: bool,
     /// The compared depth from the light's own view (trapezoidal maps).
     warp_depth: bool,
+    /// What the maps store (`shadow_map.buffer`; depth for every technique but shadow_map).
+    buffer: MapBuffer,
 }
 
 impl LitVariant {
@@ -204,6 +224,7 @@ impl LitVariant {
             mask,
             hybrid: false,
             warp_depth: false,
+            buffer: MapBuffer::Depth,
         }
     }
 }
@@ -225,6 +246,8 @@ struct Programs {
     debug_volume: Program,
     /// Lit programs by their define set, compiled on first use.
     lit: HashMap<String, Program>,
+    /// Depth programs of ID and priority buffers, compiled on first use.
+    depth_buffers: HashMap<MapBuffer, Program>,
 }
 
 impl Programs {
@@ -285,7 +308,24 @@ impl Programs {
                 &[],
             )?,
             lit: HashMap::new(),
+            depth_buffers: HashMap::new(),
         })
+    }
+
+    /// Compiles the depth program of `buffer` if needed (none for depth maps).
+    fn depth_buffer(&mut self, gl: &glow::Context, buffer: MapBuffer) -> Result<(), ProgramError> {
+        if buffer == MapBuffer::Depth || self.depth_buffers.contains_key(&buffer) {
+            return Ok(());
+        }
+        let p = Program::new(
+            gl,
+            &format!("depth[{buffer}]"),
+            sources::DEPTH_VERT,
+            Some(sources::DEPTH_FRAG),
+            &buffer_defines(buffer, false),
+        )?;
+        self.depth_buffers.insert(buffer, p);
+        Ok(())
     }
 
     /// Compiles the lit variant for `defines` if needed; returns its key.
@@ -327,6 +367,9 @@ impl Programs {
         ] {
             p.delete(gl);
         }
+        for p in self.depth_buffers.values() {
+            p.delete(gl);
+        }
         for p in self.lit.values() {
             p.delete(gl);
         }
@@ -342,6 +385,8 @@ pub struct Renderer {
     gpu: Option<GpuScene>,
     timer: PassTimer,
     shadow_maps: ShadowMaps,
+    /// Per-triangle ID and priority tables (`shadow_map.buffer`).
+    id_tables: IdTables,
     /// Every light's shadow-volume buffers.
     volume_buffers: VolumeBuffers,
     /// Caster groups' meshes for volumes the GPU extrudes.
@@ -362,11 +407,25 @@ pub struct Renderer {
     fixed: Option<FixedFunction>,
 }
 
+/// What one view's depth pass draws into and reads.
+#[derive(Clone, Copy)]
+struct MapBuffers {
+    depth: glow::Texture,
+    /// The ID buffer's colour texture.
+    ids: Option<glow::Texture>,
+    /// The per-triangle table of ID and priority buffers.
+    table: Option<glow::Texture>,
+    buffer: MapBuffer,
+}
+
 /// One shadow-mapped view's texture, by light plan and view index.
 struct ViewMap {
     plan_index: usize,
     view_index: usize,
+    /// What the lit pass reads: the depth texture, or the ID buffer's colour.
     texture: glow::Texture,
+    /// The per-triangle table of ID and priority buffers.
+    table: Option<glow::Texture>,
 }
 
 impl Renderer {
@@ -402,6 +461,7 @@ impl Renderer {
             gpu: None,
             timer,
             shadow_maps: ShadowMaps::default(),
+            id_tables: IdTables::default(),
             volume_buffers: VolumeBuffers::default(),
             extrusions: Extrusions::default(),
             measure_targets: None,
@@ -613,6 +673,7 @@ impl Renderer {
             measure_targets: self.measure_targets.as_ref(),
             timer: &mut self.timer,
             shadow_maps: &mut self.shadow_maps,
+            id_tables: &mut self.id_tables,
             planner: &mut self.planner,
             volume_buffers: &mut self.volume_buffers,
             extrusions: &mut self.extrusions,
@@ -677,6 +738,10 @@ impl Renderer {
         let shadow_mapped = plan.any_maps();
         let hybrids = plan.any(Technique::Hybrid);
         let trapezoids = plan.any(Technique::Tsm);
+        let buffer = options.map_buffer(Technique::ShadowMap);
+        if buffer != MapBuffer::Depth && plan.any(Technique::ShadowMap) {
+            self.programs.depth_buffer(gl, buffer)?;
+        }
         let mut variants = HashMap::new();
         for (shadow_map, cube, six, hybrid, warp_depth) in [
             (false, false, false, false, false),
@@ -704,10 +769,23 @@ impl Renderer {
                     mask,
                     hybrid,
                     warp_depth,
+                    buffer: MapBuffer::Depth,
                 };
-                let defines = lit_defines(options, v, request.overlays.texel_grid);
-                let key = self.programs.lit_variant(gl, &defines)?;
-                variants.insert(v, key);
+                let with_buffer = LitVariant { buffer, ..v };
+                let buffered = buffer != MapBuffer::Depth
+                    && shadow_map
+                    && !cube
+                    && !hybrid
+                    && !warp_depth
+                    && plan.any(Technique::ShadowMap);
+                for v in [Some(v), buffered.then_some(with_buffer)]
+                    .into_iter()
+                    .flatten()
+                {
+                    let defines = lit_defines(options, v, request.overlays.texel_grid);
+                    let key = self.programs.lit_variant(gl, &defines)?;
+                    variants.insert(v, key);
+                }
             }
         }
         Ok(variants)
@@ -731,6 +809,9 @@ impl Renderer {
             let faces = if m.cube { 6 } else { 1 };
             if k < i + faces {
                 let face = m.cube.then_some(k - i);
+                if let Some(ids) = m.ids {
+                    return Some(debug::id_image(gl, ids, m.size));
+                }
                 let depth = debug::read_depth_texture(gl, m.texture, face, m.size);
                 let _ = m.view;
                 return Some(debug::depth_image(&depth, m.size, m.size));
@@ -799,6 +880,7 @@ struct FrameRun<'a> {
     measure_targets: Option<&'a (GBufferTarget, MaskTarget)>,
     timer: &'a mut PassTimer,
     shadow_maps: &'a mut ShadowMaps,
+    id_tables: &'a mut IdTables,
     planner: &'a mut Planner,
     volume_buffers: &'a mut VolumeBuffers,
     extrusions: &'a mut Extrusions,
@@ -924,7 +1006,10 @@ impl<'a> FrameRun<'a> {
         let (gl, plan) = (self.ctx.gl, self.ctx.plan);
         let sm = &self.ctx.options.shadow_map;
         let mut maps: Vec<ViewMap> = Vec::new();
-        let fbo = if plan.any_maps() && !self.copy {
+        let any_ids = plan.lights.iter().any(|lp| {
+            lp.technique.uses_maps() && self.ctx.options.map_buffer(lp.technique) == MapBuffer::Id
+        });
+        let fbo = if plan.any_maps() && (!self.copy || any_ids) {
             Some(self.shadow_maps.fbo(gl).map_err(RenderError::Gl)?)
         } else {
             None
@@ -933,12 +1018,49 @@ impl<'a> FrameRun<'a> {
             if !lp.technique.uses_maps() {
                 continue;
             }
+            let buffer = self.ctx.options.map_buffer(lp.technique);
+            let (table, table_changed) = self
+                .id_tables
+                .table(
+                    gl,
+                    self.ctx.scene,
+                    self.ctx.gpu,
+                    buffer,
+                    sm.id_unit,
+                    lp.light,
+                )
+                .map_err(RenderError::Gl)?;
             for (vi, view) in lp.views.iter().enumerate() {
                 let cube = view.kind == ViewKind::Cube;
-                let (texture, holds) = self
+                let (texture, mut holds) = self
                     .shadow_maps
-                    .slot(gl, lp.light, vi, cube, sm.size, sm.depth_bits)
+                    .slot(
+                        gl,
+                        (lp.light, vi),
+                        MapKey {
+                            cube,
+                            size: sm.size,
+                            bits: sm.depth_bits,
+                            buffer,
+                        },
+                    )
                     .map_err(RenderError::Gl)?;
+                let ids = if buffer == MapBuffer::Id {
+                    let (t, fresh) = self
+                        .shadow_maps
+                        .id_texture(gl, lp.light, vi, sm.size)
+                        .map_err(RenderError::Gl)?;
+                    if fresh {
+                        holds = None;
+                    }
+                    Some(t)
+                } else {
+                    None
+                };
+                // Maps drawn with another table hold other priorities.
+                if table_changed {
+                    holds = None;
+                }
                 let key = lp.view_keys.get(vi).copied().flatten();
                 let faces: Vec<(Option<usize>, glam::Mat4)> = if key.is_some() && holds == key {
                     self.cache.maps_reused += 1;
@@ -955,21 +1077,31 @@ impl<'a> FrameRun<'a> {
                     }
                 };
                 for (face, view_proj) in faces {
-                    go_on!(self.map_face(lp, vi, (face, view_proj), fbo, texture));
+                    let buffers = MapBuffers {
+                        depth: texture,
+                        ids,
+                        table,
+                        buffer,
+                    };
+                    go_on!(self.map_face(lp, vi, (face, view_proj), fbo, buffers));
                 }
                 self.shadow_maps.set_content(lp.light, vi, key);
-                ShadowMaps::configure(gl, texture, cube, sm.compare, sm.filter);
+                if ids.is_none() {
+                    ShadowMaps::configure(gl, texture, cube, sm.compare, sm.filter);
+                }
                 self.last_maps.push(LastMap {
                     light: lp.light,
                     view: vi,
                     texture,
+                    ids,
                     cube,
                     size: sm.size,
                 });
                 maps.push(ViewMap {
                     plan_index: pi,
                     view_index: vi,
-                    texture,
+                    texture: ids.unwrap_or(texture),
+                    table,
                 });
             }
         }
@@ -984,14 +1116,21 @@ impl<'a> FrameRun<'a> {
         vi: usize,
         (face, view_proj): (Option<usize>, glam::Mat4),
         fbo: Option<glow::Framebuffer>,
-        texture: glow::Texture,
+        buffers: MapBuffers,
     ) -> Flow<()> {
         let gl = self.ctx.gl;
         let size = self.ctx.options.shadow_map.size;
         let shown = face.or(Some(vi));
+        let texture = buffers.depth;
+        // ID buffers are drawn through the FBO: their IDs are colour, the frame's is not theirs.
+        let through_fbo = !self.copy || buffers.ids.is_some();
         let target = match fbo {
-            Some(fbo) => DepthTarget::Fbo { fbo, texture },
-            None => DepthTarget::Copy {
+            Some(fbo) if through_fbo => DepthTarget::Fbo {
+                fbo,
+                texture,
+                colour: buffers.ids,
+            },
+            _ => DepthTarget::Copy {
                 frame: self.target,
                 texture,
             },
@@ -1005,19 +1144,29 @@ impl<'a> FrameRun<'a> {
             order: lp.order,
             casters: lp.view_casters.get(vi).map(Vec::as_slice),
             depth_view_proj: lp.views[vi].depth_view_proj,
+            buffer: buffers.buffer,
+            table: buffers.table,
+            light_position: self.ctx.scene.lights[lp.light].position,
         };
         let depth_program = if view.depth_view_proj.is_some() {
             &self.programs.depth_warp
         } else {
-            &self.programs.depth
+            self.programs
+                .depth_buffers
+                .get(&buffers.buffer)
+                .unwrap_or(&self.programs.depth)
         };
         match self.fixed {
             Some(ff) => fixed::shadow_map::render(&self.ctx, ff, &view, &target),
             None => passes::shadow_map::render(&self.ctx, depth_program, &view, &target),
         }
-        let copy = self.copy;
+        let copy = !through_fbo;
         let fbo_of_frame = self.target.fbo;
         go_on!(self.step(StepKind::LightView, Some(lp), shown, |_| {
+            // An ID buffer shows its IDs; a priority buffer's depth is its priority ramp.
+            if let Some(ids) = buffers.ids {
+                return debug::id_image(gl, ids, size);
+            }
             let depth = if copy {
                 debug::read_depth(gl, fbo_of_frame, size, size)
             } else {
@@ -1185,6 +1334,7 @@ impl<'a> FrameRun<'a> {
                     ShadowBinding {
                         view,
                         texture: m.texture,
+                        table: m.table,
                     },
                     receivers,
                     rect.or(lp.scissor),
@@ -1603,6 +1753,11 @@ fn draw_maps<'p>(
             mask: kind == MapPass::Mask,
             hybrid,
             warp_depth: shadow_map && lp.technique == Technique::Tsm,
+            buffer: if shadow_map {
+                ctx.options.map_buffer(lp.technique)
+            } else {
+                MapBuffer::Depth
+            },
         };
         let p = program(v);
         let wrapped;
@@ -1694,6 +1849,7 @@ impl Drop for Renderer {
         self.programs.delete(gl);
         self.target.delete(gl);
         self.shadow_maps.delete(gl);
+        self.id_tables.delete(gl);
         self.volume_buffers.delete(gl);
         self.extrusions.delete(gl);
         if let Some((g, m)) = self.measure_targets.take() {

@@ -2,14 +2,16 @@
 //! only when their kind, size or precision change (so long runs create no GL objects). Each
 //! remembers what it was drawn from, so that the planner's cache can reuse it.
 
-use crate::options::{Compare, DepthBits, Filter};
+use crate::options::{Compare, DepthBits, Filter, MapBuffer};
 use glow::HasContext;
 
+/// What a map's texture is: a map of another kind holds nothing reusable.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
-struct MapKey {
-    cube: bool,
-    size: u32,
-    bits: DepthBits,
+pub struct MapKey {
+    pub cube: bool,
+    pub size: u32,
+    pub bits: DepthBits,
+    pub buffer: MapBuffer,
 }
 
 struct Slot {
@@ -23,6 +25,8 @@ struct Slot {
 #[derive(Default)]
 pub struct ShadowMaps {
     slots: std::collections::HashMap<(usize, usize), Slot>,
+    /// ID buffers' colour textures (RGBA8: an ID's four bytes), with their size.
+    ids: std::collections::HashMap<(usize, usize), (glow::Texture, u32)>,
     fbo: Option<glow::Framebuffer>,
 }
 
@@ -89,13 +93,9 @@ impl ShadowMaps {
     pub fn slot(
         &mut self,
         gl: &glow::Context,
-        light: usize,
-        view: usize,
-        cube: bool,
-        size: u32,
-        bits: DepthBits,
+        (light, view): (usize, usize),
+        key: MapKey,
     ) -> Result<(glow::Texture, Option<u64>), String> {
-        let key = MapKey { cube, size, bits };
         match self.slots.get(&(light, view)) {
             Some(slot) if slot.key == key => return Ok((slot.texture, slot.content)),
             Some(old) => {
@@ -114,6 +114,50 @@ impl ShadowMaps {
             },
         );
         Ok((texture, None))
+    }
+
+    /// The ID buffer's colour texture of `light`'s view `view`, and whether it was just made
+    /// (it then holds nothing).
+    pub fn id_texture(
+        &mut self,
+        gl: &glow::Context,
+        light: usize,
+        view: usize,
+        size: u32,
+    ) -> Result<(glow::Texture, bool), String> {
+        if let Some(&(t, s)) = self.ids.get(&(light, view)) {
+            if s == size {
+                return Ok((t, false));
+            }
+            // SAFETY: our texture, replaced.
+            unsafe { gl.delete_texture(t) };
+        }
+        // SAFETY: storage for a new texture; the binding is reset afterwards.
+        let t = unsafe {
+            let t = gl.create_texture()?;
+            gl.bind_texture(glow::TEXTURE_2D, Some(t));
+            gl.tex_image_2d(
+                glow::TEXTURE_2D,
+                0,
+                glow::RGBA8 as i32,
+                size as i32,
+                size as i32,
+                0,
+                glow::RGBA,
+                glow::UNSIGNED_BYTE,
+                glow::PixelUnpackData::Slice(None),
+            );
+            for p in [glow::TEXTURE_MIN_FILTER, glow::TEXTURE_MAG_FILTER] {
+                gl.tex_parameter_i32(glow::TEXTURE_2D, p, glow::NEAREST as i32);
+            }
+            for p in [glow::TEXTURE_WRAP_S, glow::TEXTURE_WRAP_T] {
+                gl.tex_parameter_i32(glow::TEXTURE_2D, p, glow::CLAMP_TO_EDGE as i32);
+            }
+            gl.bind_texture(glow::TEXTURE_2D, None);
+            t
+        };
+        self.ids.insert((light, view), (t, size));
+        Ok((t, true))
     }
 
     /// Records what `light`'s view `view` now holds.
@@ -171,7 +215,7 @@ impl ShadowMaps {
     }
 
     pub fn texture_count(&self) -> usize {
-        self.slots.len()
+        self.slots.len() + self.ids.len()
     }
 
     pub fn delete(&mut self, gl: &glow::Context) {
@@ -179,6 +223,9 @@ impl ShadowMaps {
         unsafe {
             for (_, s) in self.slots.drain() {
                 gl.delete_texture(s.texture);
+            }
+            for (_, (t, _)) in self.ids.drain() {
+                gl.delete_texture(t);
             }
             if let Some(f) = self.fbo.take() {
                 gl.delete_framebuffer(f);

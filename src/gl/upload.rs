@@ -220,6 +220,11 @@ impl GpuScene {
     }
 
     /// The listed surfaces, merged into as few draws as the state order allows.
+    /// Where surface `s`'s indices start in the GPU index buffer.
+    pub fn gpu_first_index(&self, s: usize) -> u32 {
+        self.gpu_first[s]
+    }
+
     pub fn draw_list_of(&self, scene: &Scene, surfaces: &[u32]) -> Vec<DrawItem> {
         let mut sorted: Vec<usize> = surfaces.iter().map(|&s| s as usize).collect();
         sorted.sort_unstable_by_key(|&s| self.gpu_first[s]);

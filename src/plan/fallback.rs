@@ -9,7 +9,7 @@ use crate::options::{
 use serde::Serialize;
 
 /// The features `gl.disable` may name (those a fallback exists for).
-pub const FEATURES: [&str; 10] = [
+pub const FEATURES: [&str; 11] = [
     "render_to_depth_texture",
     "depth_copy",
     "depth_read",
@@ -20,6 +20,7 @@ pub const FEATURES: [&str; 10] = [
     "stencil_wrap",
     "timer_query",
     "depth_bounds",
+    "primitive_id",
 ];
 
 /// One option replaced because the GL lacks a feature.
@@ -89,6 +90,9 @@ pub fn resolve(options: &Options, has: impl Fn(&str) -> bool) -> (Options, Vec<F
     // ES 3.0 reads no depth: the planner's depth comes reduced by a shader, read as colour.
     if !has("depth_read") && !o.plan.reduce_depth {
         fall("depth_read", "plan.reduce_depth", &mut o, "true");
+    }
+    if !has("primitive_id") && o.shadow_map.buffer != crate::options::MapBuffer::Depth {
+        fall("primitive_id", "shadow_map.buffer", &mut o, "depth");
     }
     if !has("float_depth") && o.shadow_map.depth_bits == DepthBits::D32f {
         fall("float_depth", "shadow_map.depth_bits", &mut o, "24");

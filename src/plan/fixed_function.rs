@@ -52,6 +52,10 @@ pub fn resolve(options: &Options) -> (Options, Vec<Fallback>) {
     if o.shadow_map.omni == OmniMode::Cube {
         replace("shadow_map.omni", &mut o, "six_spots");
     }
+    // ID and priority buffers need shaders (gl_PrimitiveID, the table lookups).
+    if o.shadow_map.buffer != crate::options::MapBuffer::Depth {
+        replace("shadow_map.buffer", &mut o, "depth");
+    }
     if o.shadow_volume.stencil == StencilPasses::Separate {
         replace("shadow_volume.stencil", &mut o, "two_pass");
     }

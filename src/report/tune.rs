@@ -1,6 +1,6 @@
 //! `tune`: the price of accuracy on one scene. A budgeted search of the option space (technique,
-//! map size, depth bits, filter, offsets, caster faces, omni views; counting, stencil passes,
-//! edge rule, casters; the planner) by successive halving: many random configurations measured
+//! map size, depth bits, filter, offsets, caster faces, omni views, what the map stores
+//! (depth, IDs, priorities); counting, stencil passes, edge rule, casters; the planner) by successive halving: many random configurations measured
 //! cheaply (few frames), the better half by Pareto rank (error, then time) measured again with
 //! more frames, until a few remain, which are measured in full (round-robin timing, the exact
 //! reference on the first frame, the sampled one along the path). Their Pareto frontier says, for
@@ -49,6 +49,11 @@ pub fn space() -> Vec<Dimension> {
         dim("shadow_map.offset_units", &["0", "4", "16", "64"], SM),
         dim("shadow_map.cull", &["both", "front", "back"], SM),
         dim("shadow_map.omni", &["six_spots", "cube"], SM),
+        dim(
+            "shadow_map.buffer",
+            &["depth", "id", "priority", "priority_depth"],
+            SM,
+        ),
         dim("shadow_volume.counting", &["zfail", "zpass", "auto"], SV),
         dim("shadow_volume.stencil", &["two_pass", "separate"], SV),
         dim("shadow_volume.edge_rule", &["paper", "signed"], SV),

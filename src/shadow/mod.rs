@@ -2,6 +2,7 @@
 
 pub mod edges;
 pub mod extrusion;
+pub mod parts;
 pub mod views;
 pub mod volume;
 pub mod warp;

@@ -182,9 +182,12 @@ pub fn shadow_views(
                     }
                 })
                 .collect();
-            match options.omni {
-                OmniMode::SixSpots => faces,
-                OmniMode::Cube => {
+            // ID and priority buffers read their maps as 2D textures: six spots always.
+            let cube = options.omni == OmniMode::Cube
+                && options.buffer == crate::options::MapBuffer::Depth;
+            match cube {
+                false => faces,
+                true => {
                     // One range for all faces: a cube map is compared with one projection.
                     let near = faces.iter().map(|f| f.near).fold(f32::INFINITY, f32::min);
                     let far = faces.iter().map(|f| f.far).fold(0.0, f32::max);

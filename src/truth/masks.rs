@@ -22,9 +22,26 @@ pub fn reference_mask(
     index: usize,
     tracing: Tracing,
 ) -> Mask {
+    let target = light.position.as_dvec3();
+    mask_by(gbuffer, light, index, |p, n| {
+        let origin = shadow_ray_origin(p, n);
+        match tracing {
+            Tracing::Bvh => reference.occluded(origin, target),
+            Tracing::BruteForce => reference.occluded_brute_force(origin, target),
+        }
+    })
+}
+
+/// A mask of `light` over `gbuffer`: receivers are the pixels the light reaches
+/// (`Light::reaches`), each shadowed where `shadowed(position, normal)` says so.
+pub fn mask_by(
+    gbuffer: &GBuffer,
+    light: &Light,
+    index: usize,
+    shadowed: impl Fn(Vec3, Vec3) -> bool + Sync,
+) -> Mask {
     let w = gbuffer.width as usize;
     let mut values = vec![MaskValue::NotReceiver as u8; w * gbuffer.height as usize];
-    let target = light.position.as_dvec3();
     values.par_chunks_mut(w).enumerate().for_each(|(y, row)| {
         for (x, out) in row.iter_mut().enumerate() {
             let i = y * w + x;
@@ -36,12 +53,7 @@ pub fn reference_mask(
             if !light.reaches(p.as_dvec3(), n.as_dvec3()) {
                 continue;
             }
-            let origin = shadow_ray_origin(p, n);
-            let blocked = match tracing {
-                Tracing::Bvh => reference.occluded(origin, target),
-                Tracing::BruteForce => reference.occluded_brute_force(origin, target),
-            };
-            *out = if blocked {
+            *out = if shadowed(p, n) {
                 MaskValue::Shadowed
             } else {
                 MaskValue::Lit

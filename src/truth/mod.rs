@@ -6,6 +6,7 @@ pub mod measure;
 pub mod metrics;
 pub mod reference;
 pub mod sampled;
+pub mod subdivision;
 
 pub use masks::{Tracing, reference_mask};
 pub use measure::{ExactMasks, Measurement, exact_mask, measure, measure_with};

@@ -15,7 +15,10 @@ use glow::HasContext;
 /// A shadow map to test the light's fragments against.
 pub struct ShadowBinding<'a> {
     pub view: &'a ShadowView,
+    /// The depth texture, or an ID buffer's colour.
     pub texture: glow::Texture,
+    /// The per-triangle table of ID and priority buffers.
+    pub table: Option<glow::Texture>,
 }
 
 /// How the lit pass learns what is in shadow.
@@ -103,6 +106,16 @@ fn bind_maps(ctx: &PassContext, program: &Program, lp: &LightPlan, shadow: &LitS
         }
     }
     let space = TexgenFrame::of(ctx, lp);
+    let table = match shadow {
+        LitShadow::Map(s) => s.table,
+        LitShadow::Faces(maps) => maps.first().and_then(|m| m.table),
+        _ => None,
+    };
+    if let Some(table) = table {
+        super::shadow_map::bind_table(gl, program, table);
+        program.set_u32(gl, "u_id_mask", super::shadow_map::id_mask(o.id_bits));
+        program.set_f32(gl, "u_priority_bias", o.priority_bias);
+    }
     if let LitShadow::Faces(maps) = shadow {
         program.set_mat4(gl, "u_view", &space.to_texgen_space);
         program.set_f32(gl, "u_map_size", o.size as f32);

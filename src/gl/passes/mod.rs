@@ -82,6 +82,9 @@ pub fn draw_items_with(
 ) {
     let gl = ctx.gl;
     let mut last_owner = None;
+    // ID and priority buffers find each triangle's table entry from its place in the index
+    // buffer: the item's first triangle plus gl_PrimitiveID.
+    let tri_base = program.uniform("u_tri_base").cloned();
     // SAFETY: the scene's VAO and buffers are valid; index ranges come from the GPU index buffer.
     unsafe {
         gl.bind_vertex_array(Some(ctx.gpu.vao));
@@ -107,6 +110,9 @@ pub fn draw_items_with(
             program.set_i32(gl, "u_alpha_func", alpha.map_or(0, |a| a.code()));
             apply_cull(gl, cull(material.cull));
             extra(item);
+            if let Some(l) = &tri_base {
+                gl.uniform_1_i32(Some(l), (item.first_index / 3) as i32);
+            }
             gl.draw_elements(
                 glow::TRIANGLES,
                 item.index_count as i32,

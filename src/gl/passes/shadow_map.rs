@@ -6,7 +6,7 @@ use super::{PassContext, draw_items_with};
 use crate::gl::program::Program;
 use crate::gl::target::Framebuffer;
 use crate::options::{
-    AlphaCasters, CasterFaces, DepthBits, DepthSource, OffsetPass, ShadowMapOptions,
+    AlphaCasters, CasterFaces, DepthBits, DepthSource, MapBuffer, OffsetPass, ShadowMapOptions,
 };
 use crate::scene::Cull;
 use glam::Mat4;
@@ -21,6 +21,26 @@ pub fn offset_for(o: &ShadowMapOptions, order: usize) -> Option<(f32, f32)> {
     })
 }
 
+/// Binds an ID or priority buffer's per-triangle table to unit 7 (`u_table`).
+pub fn bind_table(gl: &glow::Context, program: &Program, table: glow::Texture) {
+    program.set_i32(gl, "u_table", 7);
+    // SAFETY: our table texture on a unit the passes leave alone; back to unit 0.
+    unsafe {
+        gl.active_texture(glow::TEXTURE7);
+        gl.bind_texture(glow::TEXTURE_2D, Some(table));
+        gl.active_texture(glow::TEXTURE0);
+    }
+}
+
+/// The mask that keeps `bits` of an ID.
+pub fn id_mask(bits: u32) -> u32 {
+    if bits >= 32 {
+        u32::MAX
+    } else {
+        (1u32 << bits) - 1
+    }
+}
+
 /// Where the depth pass draws.
 pub enum DepthTarget<'a> {
     /// The frame's own depth buffer, then a copy into `texture` (the paper).
@@ -28,10 +48,11 @@ pub enum DepthTarget<'a> {
         frame: &'a Framebuffer,
         texture: glow::Texture,
     },
-    /// Straight into `texture` through `fbo`.
+    /// Straight into `texture` through `fbo`, with the ID buffer's `colour` when it has one.
     Fbo {
         fbo: glow::Framebuffer,
         texture: glow::Texture,
+        colour: Option<glow::Texture>,
     },
 }
 
@@ -57,6 +78,10 @@ pub struct MapView<'a> {
     /// The matrix whose depth is stored, when not `view_proj` (trapezoidal maps: drawn with
     /// the depth program's `WARP_DEPTH` variant, which offsets in the shader).
     pub depth_view_proj: Option<Mat4>,
+    /// What the map stores, and for ID and priority buffers their per-triangle table.
+    pub buffer: MapBuffer,
+    pub table: Option<glow::Texture>,
+    pub light_position: glam::Vec3,
 }
 
 /// The smallest depth step of a map's format: glPolygonOffset's unit `r`.
@@ -88,6 +113,11 @@ pub fn render(ctx: &PassContext, program: &Program, view: &MapView, target: &Dep
         // SAFETY: the offset is the shader's here.
         unsafe { gl.disable(glow::POLYGON_OFFSET_FILL) };
     }
+    if let Some(table) = view.table {
+        bind_table(gl, program, table);
+        program.set_vec3(gl, "u_light_pos", view.light_position);
+        program.set_u32(gl, "u_id_mask", id_mask(o.id_bits));
+    }
     draw_items_with(
         ctx,
         program,
@@ -110,7 +140,11 @@ pub fn begin(ctx: &PassContext, view: &MapView, target: &DepthTarget) {
             DepthTarget::Copy { frame, .. } => {
                 gl.bind_framebuffer(glow::FRAMEBUFFER, Some(frame.fbo));
             }
-            DepthTarget::Fbo { fbo, texture } => {
+            DepthTarget::Fbo {
+                fbo,
+                texture,
+                colour,
+            } => {
                 gl.bind_framebuffer(glow::FRAMEBUFFER, Some(*fbo));
                 gl.framebuffer_texture_2d(
                     glow::FRAMEBUFFER,
@@ -119,21 +153,48 @@ pub fn begin(ctx: &PassContext, view: &MapView, target: &DepthTarget) {
                     Some(*texture),
                     0,
                 );
-                // glDrawBuffers: ES 3.0 has no glDrawBuffer.
-                gl.draw_buffers(&[glow::NONE]);
-                gl.read_buffer(glow::NONE);
+                if let Some(ids) = colour {
+                    gl.framebuffer_texture_2d(
+                        glow::FRAMEBUFFER,
+                        glow::COLOR_ATTACHMENT0,
+                        glow::TEXTURE_2D,
+                        Some(*ids),
+                        0,
+                    );
+                    gl.draw_buffers(&[glow::COLOR_ATTACHMENT0]);
+                    gl.read_buffer(glow::COLOR_ATTACHMENT0);
+                } else {
+                    // glDrawBuffers: ES 3.0 has no glDrawBuffer.
+                    gl.draw_buffers(&[glow::NONE]);
+                    gl.read_buffer(glow::NONE);
+                }
             }
         }
         gl.viewport(0, 0, size as i32, size as i32);
-        gl.color_mask(false, false, false, false);
         gl.depth_mask(true);
         gl.clear_depth(1.0);
-        gl.clear(glow::DEPTH_BUFFER_BIT);
+        if matches!(
+            target,
+            DepthTarget::Fbo {
+                colour: Some(_),
+                ..
+            }
+        ) {
+            // No ID yet: all ones (an ID no triangle has below 2^32 - 1).
+            gl.color_mask(true, true, true, true);
+            gl.clear_color(1.0, 1.0, 1.0, 1.0);
+            gl.clear(glow::DEPTH_BUFFER_BIT | glow::COLOR_BUFFER_BIT);
+        } else {
+            gl.color_mask(false, false, false, false);
+            gl.clear(glow::DEPTH_BUFFER_BIT);
+        }
         gl.enable(glow::DEPTH_TEST);
         gl.depth_func(glow::LESS);
         gl.disable(glow::BLEND);
         gl.disable(glow::STENCIL_TEST);
+        // ID and priority buffers write no depth the offset could move: no bias.
         match (offset_for(o, view.order), o.offset_pass) {
+            _ if view.buffer != MapBuffer::Depth => gl.disable(glow::POLYGON_OFFSET_FILL),
             (Some((factor, units)), OffsetPass::ShadowMap | OffsetPass::Both) => {
                 gl.enable(glow::POLYGON_OFFSET_FILL);
                 gl.polygon_offset(factor, units);
@@ -169,7 +230,7 @@ pub fn end(gl: &glow::Context, view: &MapView, target: &DepthTarget) {
     unsafe {
         gl.disable(glow::POLYGON_OFFSET_FILL);
         gl.color_mask(true, true, true, true);
-        if let DepthTarget::Fbo { .. } = target {
+        if let DepthTarget::Fbo { colour, .. } = target {
             gl.framebuffer_texture_2d(
                 glow::FRAMEBUFFER,
                 glow::DEPTH_ATTACHMENT,
@@ -177,6 +238,15 @@ pub fn end(gl: &glow::Context, view: &MapView, target: &DepthTarget) {
                 None,
                 0,
             );
+            if colour.is_some() {
+                gl.framebuffer_texture_2d(
+                    glow::FRAMEBUFFER,
+                    glow::COLOR_ATTACHMENT0,
+                    glow::TEXTURE_2D,
+                    None,
+                    0,
+                );
+            }
         }
     }
 }

@@ -11,6 +11,7 @@
 
 mod claims;
 mod figures;
+mod forsyth;
 mod lab;
 mod page;
 mod pareto;
@@ -224,6 +225,10 @@ const ORDER: &[&str] = &[
     "thesis-ch5",
     "claim-sm-lights",
     "claim-sv-lights",
+    "forsyth-buffers",
+    "forsyth-ids",
+    "forsyth-shootout",
+    "vector-subdivision",
 ];
 
 /// Runs every section and writes `out/index.html`, `out/index.md`, `out/results.json` and the
@@ -240,7 +245,8 @@ pub fn run(
     })?;
     let sweep_scenes = settings.sweep_scenes();
     // Units of work: the figure sections and both claims, then one sweep per scene.
-    let figure_units = figures::SECTIONS + 2 * claims::SECTIONS + thesis::SECTIONS;
+    let figure_units =
+        figures::SECTIONS + 2 * claims::SECTIONS + thesis::SECTIONS + forsyth::SECTIONS;
     let bar = if settings.progress {
         let b = ProgressBar::new((figure_units + sweep_scenes.len()) as u64);
         b.set_style(
@@ -295,6 +301,10 @@ pub fn run(
             sections.extend(figures::run(&mut lab)?);
             sections.push(thesis::chapter5(&mut lab)?);
             bar.inc(1);
+            for section in [forsyth::ids, forsyth::shootout, forsyth::subdivision] {
+                sections.push(section(&mut lab)?);
+                bar.inc(1);
+            }
         }
         sections.extend(claims::run(&mut lab)?);
         report.rows.extend(lab.into_rows());
@@ -302,6 +312,17 @@ pub fn run(
     if settings.quick {
         // q3dm6ish's claims were skipped: count them as done.
         bar.inc(claims::SECTIONS as u64);
+    }
+    {
+        // ID and priority buffers on the grazing light, where depth maps need their bias most.
+        let name = "../hard/grazing";
+        let (scene, options, _) = load_scene(settings, name)?;
+        renderer.load_scene(&scene)?;
+        let mut lab = Lab::new(renderer, &scene, "grazing", options, settings, out, &bar)
+            .with_scene_file("assets/hard/grazing.toml");
+        sections.push(forsyth::buffers(&mut lab)?);
+        report.rows.extend(lab.into_rows());
+        bar.inc(1);
     }
     {
         // Perspective shadow maps on the hard case made for them.

@@ -1,0 +1,128 @@
+//! ID and priority buffers (`shadow_map.buffer`, Forsyth's slides) against the exact
+//! reference: no bias needed where depth maps need it most, the edge filter's cure and its
+//! shrink, and the priority buffer's sort. `cargo test --release --test id_buffers --
+//! --nocapture` prints the figures.
+
+mod common;
+
+use common::{Measured, Measurer, differing, load_asset, load_scene_file, options_with};
+use shadowlab::truth::Counts;
+
+const SM: &str = "technique=shadow_map";
+
+fn pct(x: f64) -> String {
+    format!("{:.3}%", 100.0 * x)
+}
+
+fn report(case: &str, what: &str, m: &Measured) -> Counts {
+    let r = m.total.rates();
+    println!(
+        "{case} {what}: error {} (false shadow {}, false lit {}), {} outside the band",
+        pct(r.total),
+        pct(r.false_shadow),
+        pct(r.false_lit),
+        pct(r.total_excl_boundary)
+    );
+    m.total
+}
+
+#[test]
+fn id_and_priority_buffers_need_no_bias_on_the_grazing_light() {
+    let case = "grazing";
+    let mut m = Measurer::new(
+        load_asset("assets/hard/grazing.toml").0,
+        &options_with(&[SM]),
+    );
+    let depth_bare = m.measure(&options_with(&[SM, "shadow_map.offset=false"]));
+    let id = m.measure(&options_with(&[
+        SM,
+        "shadow_map.buffer=id",
+        "shadow_map.offset=false",
+    ]));
+    let id_offset = m.measure(&options_with(&[SM, "shadow_map.buffer=id"]));
+    let priority = m.measure(&options_with(&[
+        SM,
+        "shadow_map.buffer=priority",
+        "shadow_map.offset=false",
+    ]));
+    let bare = report(case, "depth, no offset", &depth_bare).rates().total;
+    let id_error = report(case, "id, no offset", &id).rates().total;
+    let priority_error = report(case, "priority, no offset", &priority).rates().total;
+    // The case is what makes bias necessary: depth without offset is mostly acne.
+    assert!(bare > 0.40, "depth without offset: {}", pct(bare));
+    // No bias: an ID compares equal to itself. What is left is where the post meets the floor
+    // (a texel of the post's ID over floor fragments) and the edge band: under 0.1%, a
+    // five-hundredth of the acne.
+    assert!(id_error < 0.001, "id: {}", pct(id_error));
+    assert!(priority_error < 0.001, "priority: {}", pct(priority_error));
+    // The offset does not touch what an ID buffer stores.
+    assert_eq!(differing(id.mask(0), id_offset.mask(0)), 0);
+}
+
+/// The edge filter (lit where any of the nine texels holds the fragment's ID) against plain
+/// compares on oa_dm1, whose convex parts meet everywhere: false shadow away from edges (the
+/// edge acne) falls, false lit (the shrink) rises, and the shrink is a texel's: doubling the
+/// map's resolution shrinks it.
+#[test]
+fn the_edge_filter_cures_edge_acne_and_shrinks_shadows_by_about_a_texel() {
+    let case = "oa_dm1";
+    let (scene, _, _) = load_scene_file("oa_dm1");
+    let mut m = Measurer::new(scene, &options_with(&[SM]));
+    let mut shrink = Vec::new();
+    for size in [512, 1024] {
+        let sz = format!("shadow_map.size={size}");
+        let plain = m.measure(&options_with(&[SM, "shadow_map.buffer=id", &sz]));
+        let filtered = m.measure(&options_with(&[
+            SM,
+            "shadow_map.buffer=id",
+            "shadow_map.id_edge_filter=true",
+            &sz,
+        ]));
+        let p = report(case, &format!("id {size}"), &plain);
+        let f = report(case, &format!("id {size}, edge filter"), &filtered);
+        assert!(
+            2 * f.false_shadow_excl_boundary <= p.false_shadow_excl_boundary,
+            "{size}: the filter leaves {} of {} acne pixels",
+            f.false_shadow_excl_boundary,
+            p.false_shadow_excl_boundary
+        );
+        assert!(
+            f.false_lit >= p.false_lit,
+            "{size}: the filter cannot light less"
+        );
+        shrink.push(f.false_lit - p.false_lit);
+    }
+    println!(
+        "shrink (extra false-lit pixels): 512: {}, 1024: {}",
+        shrink[0], shrink[1]
+    );
+    // A texel-sized effect halves with the texel; allow for the edges' pixel rounding.
+    assert!(
+        4 * shrink[1] < 3 * shrink[0],
+        "shrink {} at 1024 against {} at 512",
+        shrink[1],
+        shrink[0]
+    );
+}
+
+/// IDs per triangle in 8 bits collide (Forsyth: per-triangle IDs need more than 8 bits): a
+/// triangle 256 IDs away is taken for the fragment's own, and its shadow is lost.
+#[test]
+fn eight_bit_triangle_ids_collide() {
+    let (scene, _, _) = load_scene_file("oa_dm1");
+    let mut m = Measurer::new(scene, &options_with(&[SM]));
+    let full = m.measure(&options_with(&[
+        SM,
+        "shadow_map.buffer=id",
+        "shadow_map.id_unit=triangle",
+    ]));
+    let narrow = m.measure(&options_with(&[
+        SM,
+        "shadow_map.buffer=id",
+        "shadow_map.id_unit=triangle",
+        "shadow_map.id_bits=8",
+    ]));
+    let f = report("oa_dm1", "triangle ids, 32 bits", &full);
+    let n = report("oa_dm1", "triangle ids, 8 bits", &narrow);
+    assert!(n.false_lit > f.false_lit, "8 bits lose no shadow: {n:?}");
+}
