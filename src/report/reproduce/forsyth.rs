@@ -352,7 +352,11 @@ pub fn subdivision(lab: &mut Lab) -> Result<Section, ReproduceError> {
         ("differ", Align::Right),
         ("differ outside the band", Align::Right),
     ]);
-    let cache = std::env::temp_dir().join(format!("shadowlab-reproduce-{}", std::process::id()));
+    // Its own folder: the report may be in the temporary folder too.
+    let cache = std::env::temp_dir().join(format!(
+        "shadowlab-subdivision-cache-{}",
+        std::process::id()
+    ));
     let mut total = Counts::default();
     let mut build_ms = 0.0;
     for (l, light) in scene.lights.iter().enumerate() {
