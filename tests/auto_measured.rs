@@ -12,6 +12,16 @@ use shadowlab::report::estimate::{learn_auto, sampled_frame};
 use shadowlab::scene::{Scene, path};
 use shadowlab::truth::{Counts, ExactMasks, Reference};
 use std::collections::BTreeMap;
+use std::sync::{Mutex, MutexGuard};
+
+/// The tests of this file compare pass times: each runs alone, so that another test's
+/// rendering on the same cores does not land in the times `auto` learns or the test measures.
+static ALONE: Mutex<()> = Mutex::new(());
+
+fn alone() -> MutexGuard<'static, ()> {
+    // A failed test poisons the lock; the others still run, one at a time.
+    ALONE.lock().unwrap_or_else(|e| e.into_inner())
+}
 
 const AUTO: &[&str] = &["technique=auto", "accuracy=1", "width=320", "height=240"];
 
@@ -104,6 +114,7 @@ fn ctf_choices_within_one_percent(extra: &[&str]) -> (usize, usize) {
 
 #[test]
 fn auto_at_one_percent_picks_for_every_light_of_ctf_compromise_a_technique_within_it() {
+    let _alone = alone();
     let (lights, _) = ctf_choices_within_one_percent(&[]);
     assert!(lights >= 8, "too few lights in view to test");
     // With the paper's volumes, which the constant estimate (0.05%) cannot tell from exact.
@@ -115,31 +126,56 @@ fn auto_at_one_percent_picks_for_every_light_of_ctf_compromise_a_technique_withi
     );
 }
 
-/// Median milliseconds of each light's passes over `frames` frames of `o`.
-fn light_costs(renderer: &mut Renderer, scene: &Scene, o: &Options) -> BTreeMap<usize, f64> {
-    let mut per: BTreeMap<usize, Vec<f64>> = BTreeMap::new();
-    for _ in 0..7 {
-        let f = renderer.render(scene, o).unwrap();
-        let mut sums: BTreeMap<usize, f64> = BTreeMap::new();
-        for p in &f.passes {
-            if let Some(l) = p.pass.light {
-                *sums.entry(l).or_default() += p.ms;
-            }
+/// Each light's milliseconds (its passes summed) in a frame of `o`.
+fn light_times(renderer: &mut Renderer, scene: &Scene, o: &Options) -> BTreeMap<usize, f64> {
+    let f = renderer.render(scene, o).unwrap();
+    let mut sums: BTreeMap<usize, f64> = BTreeMap::new();
+    for p in &f.passes {
+        if let Some(l) = p.pass.light {
+            *sums.entry(l).or_default() += p.ms;
         }
-        for (l, ms) in sums {
-            per.entry(l).or_default().push(ms);
+    }
+    sums
+}
+
+/// Median milliseconds of each light's passes under each of `runs`, taken in turns (three
+/// frames of each, then again) so that whatever slows the machine meanwhile slows them alike.
+/// The first frame of a turn is not counted: a change of options redraws the maps and
+/// rebuilds what the frames keep, which a light that stays with a technique does not pay.
+fn light_costs(
+    renderer: &mut Renderer,
+    scene: &Scene,
+    runs: &[&Options],
+) -> Vec<BTreeMap<usize, f64>> {
+    let mut per: Vec<BTreeMap<usize, Vec<f64>>> = vec![BTreeMap::new(); runs.len()];
+    for _turn in 0..4 {
+        for (o, times) in runs.iter().zip(&mut per) {
+            for frame in 0..3 {
+                let lights = light_times(renderer, scene, o);
+                if frame > 0 {
+                    for (l, ms) in lights {
+                        times.entry(l).or_default().push(ms);
+                    }
+                }
+            }
         }
     }
     per.into_iter()
-        .map(|(l, mut v)| {
-            v.sort_by(f64::total_cmp);
-            (l, v[v.len() / 2])
+        .map(|lights| {
+            lights
+                .into_iter()
+                .map(|(l, mut v)| {
+                    v.sort_by(f64::total_cmp);
+                    (l, v[v.len() / 2])
+                })
+                .collect()
         })
         .collect()
 }
 
 #[test]
 fn auto_on_oa_dm1_takes_the_cheaper_technique_that_meets_the_target_and_holds_it() {
+    let _alone = alone();
     let (scene, _, _) = load_scene_file("oa_dm1");
     let o = options_with(AUTO);
     let reference = Reference::build(&scene);
@@ -149,29 +185,31 @@ fn auto_on_oa_dm1_takes_the_cheaper_technique_that_meets_the_target_and_holds_it
     assert!(!chosen.is_empty());
     // Each technique forced on every light: its full error and its cost per light, measured
     // apart from `auto` on a renderer of its own.
-    let mut measured = std::collections::HashMap::new();
-    for t in ["technique=shadow_map", "technique=shadow_volume"] {
-        let f = options_with(&[t, "width=320", "height=240"]);
-        let (_c, mut r) = gl_on(BackendChoice::Egl, &f);
+    let forced: Vec<Options> = ["technique=shadow_map", "technique=shadow_volume"]
+        .iter()
+        .map(|t| options_with(&[t, "width=320", "height=240"]))
+        .collect();
+    // Its own context, gone before `auto`'s renderer draws again.
+    let measured = {
+        let (_c, mut r) = gl_on(BackendChoice::Egl, &forced[0]);
         r.load_scene(&scene).unwrap();
-        let framed = r
-            .render_with(
-                &scene,
-                &f,
-                FrameRequest {
-                    masks: true,
-                    ..Default::default()
-                },
-            )
-            .unwrap();
-        measured.insert(
-            f.technique,
-            (
-                full_errors(&scene, &framed),
-                light_costs(&mut r, &scene, &f),
-            ),
-        );
-    }
+        let costs = light_costs(&mut r, &scene, &forced.iter().collect::<Vec<_>>());
+        let mut measured = std::collections::HashMap::new();
+        for (f, cost) in forced.iter().zip(costs) {
+            let framed = r
+                .render_with(
+                    &scene,
+                    f,
+                    FrameRequest {
+                        masks: true,
+                        ..Default::default()
+                    },
+                )
+                .unwrap();
+            measured.insert(f.technique, (full_errors(&scene, &framed), cost));
+        }
+        measured
+    };
     for (light, t) in &chosen {
         let meets = |t: Technique| measured[&t].0[light].rates().total <= 0.01;
         let cost = |t: Technique| measured[&t].1.get(light).copied().unwrap_or(0.0);
@@ -223,6 +261,7 @@ fn auto_on_oa_dm1_takes_the_cheaper_technique_that_meets_the_target_and_holds_it
 
 #[test]
 fn auto_leaves_a_technique_when_its_measured_error_rises() {
+    let _alone = alone();
     // ctf_compromise with the paper's volumes: facing back (yaw + 180°) light 0's volumes are
     // exact; facing the spawn's way they get about 43% of its receivers wrong.
     let (mut scene, _, _) = load_scene_file("ctf_compromise");
@@ -233,8 +272,8 @@ fn auto_leaves_a_technique_when_its_measured_error_rises() {
     let reference = Reference::build(&scene);
     let (_ctx, mut renderer) = gl_on(BackendChoice::Egl, &o);
     renderer.load_scene(&scene).unwrap();
-    // Facing back, `auto` learns both techniques of every light (maps twice, then volumes
-    // twice) and, never moving for cost, keeps volumes while they meet the target.
+    // Facing back, `auto` learns both techniques of every light (maps three frames, then volumes
+    // three) and, never moving for cost, keeps volumes while they meet the target.
     scene.camera = turn[1].apply(&camera);
     let f = learnt(&mut renderer, &scene, &o, &reference);
     assert_eq!(

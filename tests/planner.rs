@@ -795,9 +795,14 @@ fn auto_picks_per_light_from_measured_cost_and_the_accuracy_target() {
     let choices = &f.plan_stats.choices;
     assert_eq!(choices.len(), f.plan_stats.lights_planned, "{choices:?}");
     // Each planned light measured both techniques and took the cheaper (oa_dm1 has no
-    // alpha-tested caster near the corridor, so both estimates meet 0.5%).
+    // alpha-tested caster near the corridor, so both estimates meet 0.5%), or keeps the one it
+    // took while the other is not cheaper by the hysteresis: the running technique's cost
+    // follows its latest frames, and on a busy machine they wander.
     for why in &f.plan_stats.choices {
-        assert!(why.contains("cheapest"), "{why}");
+        assert!(
+            why.contains("the cheapest") || why.contains("kept (the other is not cheaper"),
+            "{why}"
+        );
         let light = why
             .strip_prefix("light ")
             .and_then(|s| s.split(':').next())
