@@ -75,6 +75,31 @@ fn error_falls_monotonically_with_map_size() {
     }
 }
 
+/// Maps of a kind the frame no longer draws are deleted (a `tune` run or the viewer's toggles
+/// would otherwise keep every light's ID buffers and six spot maps beside the new cubes), and a
+/// volumes-only frame keeps them for the next map frame.
+#[test]
+fn maps_of_other_options_are_released() {
+    let mut m = Measurer::new(builtin::default_scene(), &options_with(&[SM]));
+    m.measure(&options_with(&[SM]));
+    let held = m.renderer().shadow_map_textures();
+    assert!(held > 0, "no maps after a shadow-mapped frame");
+    m.measure(&options_with(&[SM, "shadow_map.buffer=id"]));
+    let with_ids = m.renderer().shadow_map_textures();
+    assert!(
+        with_ids > held,
+        "ID buffers took {with_ids} textures, depth maps {held}"
+    );
+    m.measure(&options_with(&[SM]));
+    assert_eq!(
+        m.renderer().shadow_map_textures(),
+        held,
+        "after the ID buffers"
+    );
+    m.measure(&options_with(&["technique=shadow_volume"]));
+    assert_eq!(m.renderer().shadow_map_textures(), held, "after volumes");
+}
+
 #[test]
 fn copy_and_fbo_paths_give_identical_masks() {
     let mut m = Measurer::new(builtin::default_scene(), &options_with(&[SM]));

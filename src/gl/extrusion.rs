@@ -2,8 +2,7 @@
 //! caster group, uploaded once per pose of its owner (the world's once per scene), whatever
 //! the lights do. The stencil pass draws them with `shaders/volume_gpu.vert`.
 
-use super::upload::{Plain, buffer_data};
-use super::volumes::Buffers;
+use super::upload::{Buffers, Plain, buffer_data};
 use crate::shadow::extrusion::{ExtrusionMesh, ExtrusionVertex, Role};
 use crate::shadow::volume::{CasterGroup, Counting};
 use glam::{Mat4, Vec3};

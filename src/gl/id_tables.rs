@@ -4,9 +4,10 @@
 //! reorders them into the GPU's triangle order, uploads them, and keeps them while their key
 //! holds: the ID table per scene geometry, a priority table per light and pose.
 
+use crate::geometry::Aabb;
 use crate::gl::upload::GpuScene;
 use crate::options::{IdUnit, MapBuffer};
-use crate::scene::Scene;
+use crate::scene::{Scene, SurfaceOwner};
 use crate::shadow::parts;
 use glow::HasContext;
 use std::collections::HashMap;
@@ -72,17 +73,22 @@ impl IdTables {
         };
         let mut key = vec![scene.revision(), unit as u64, slot as u64];
         if slot != usize::MAX {
-            // Ranks depend on the light and on what moves within its range only.
+            // Ranks depend on the light and on what moves within its range only (a model whose box
+            // reaches the range: at worst a table made again that did not need to be).
             let l = &scene.lights[light];
             key.extend(l.position.to_array().map(|c| c.to_bits() as u64));
             key.push(l.radius.to_bits() as u64);
+            let boxes = model_boxes(scene);
             key.extend(
                 scene
                     .models
                     .iter()
-                    .enumerate()
-                    .filter(|(m, _)| model_in_range(scene, *m, l.position, l.radius))
-                    .map(|(_, model)| model.pose),
+                    .zip(&boxes)
+                    .filter(|(_, b)| {
+                        !b.is_empty()
+                            && l.position.clamp(b.min, b.max).distance(l.position) < l.radius
+                    })
+                    .map(|(model, _)| model.pose),
             );
         }
         let key = hash(&key);
@@ -125,12 +131,18 @@ impl IdTables {
     }
 }
 
-/// Whether any surface of model `m` comes within `radius` of `at`.
-fn model_in_range(scene: &Scene, m: usize, at: glam::Vec3, radius: f32) -> bool {
-    scene.surfaces.iter().any(|s| {
-        s.owner == crate::scene::SurfaceOwner::Model(m)
-            && at.clamp(s.bounds.min, s.bounds.max).distance(at) < radius
-    })
+/// Each model's box: the union of its surfaces' (one pass over the surfaces, not one per
+/// model).
+fn model_boxes(scene: &Scene) -> Vec<Aabb> {
+    let mut boxes = vec![Aabb::EMPTY; scene.models.len()];
+    for s in &scene.surfaces {
+        if let SurfaceOwner::Model(m) = s.owner
+            && let Some(b) = boxes.get_mut(m)
+        {
+            *b = b.union(&s.bounds);
+        }
+    }
+    boxes
 }
 
 /// `entries` (scene index order) moved to the GPU index buffer's triangle order, padded to

@@ -1006,6 +1006,7 @@ impl<'a> FrameRun<'a> {
         let (gl, plan) = (self.ctx.gl, self.ctx.plan);
         let sm = &self.ctx.options.shadow_map;
         let mut maps: Vec<ViewMap> = Vec::new();
+        let mut kinds: Vec<MapKey> = Vec::new();
         let any_ids = plan.lights.iter().any(|lp| {
             lp.technique.uses_maps() && self.ctx.options.map_buffer(lp.technique) == MapBuffer::Id
         });
@@ -1032,18 +1033,18 @@ impl<'a> FrameRun<'a> {
                 .map_err(RenderError::Gl)?;
             for (vi, view) in lp.views.iter().enumerate() {
                 let cube = view.kind == ViewKind::Cube;
+                let kind = MapKey {
+                    cube,
+                    size: sm.size,
+                    bits: sm.depth_bits,
+                    buffer,
+                };
+                if !kinds.contains(&kind) {
+                    kinds.push(kind);
+                }
                 let (texture, mut holds) = self
                     .shadow_maps
-                    .slot(
-                        gl,
-                        (lp.light, vi),
-                        MapKey {
-                            cube,
-                            size: sm.size,
-                            bits: sm.depth_bits,
-                            buffer,
-                        },
-                    )
+                    .slot(gl, (lp.light, vi), kind)
                     .map_err(RenderError::Gl)?;
                 let ids = if buffer == MapBuffer::Id {
                     let (t, fresh) = self
@@ -1105,6 +1106,7 @@ impl<'a> FrameRun<'a> {
                 });
             }
         }
+        self.shadow_maps.release_unlike(gl, &kinds);
         Ok(ControlFlow::Continue(maps))
     }
 

@@ -1,5 +1,6 @@
 //! Depth textures of shadow mapping, one per light and view, kept across frames and reallocated
-//! only when their kind, size or precision change (so long runs create no GL objects). Each
+//! only when their kind, size or precision change (so long runs create no GL objects); those
+//! of a kind the frame no longer draws are deleted. Each
 //! remembers what it was drawn from, so that the planner's cache can reuse it.
 
 use crate::options::{Compare, DepthBits, Filter, MapBuffer};
@@ -158,6 +159,44 @@ impl ShadowMaps {
         };
         self.ids.insert((light, view), (t, size));
         Ok((t, true))
+    }
+
+    /// Deletes every texture of a size, precision or buffer this frame's maps (`kinds`: the
+    /// keys they were drawn with) do not have: such a map would be reallocated before its next
+    /// use anyway, and a frame with other options (a `tune` candidate, a toggle in the viewer)
+    /// would otherwise keep every light's old maps beside its own (on oa_dm3, 51 lights of
+    /// 2048-texel cubes are 5 GB). Cube or not is left out: the planner picks it per light and
+    /// view, so it changes with the camera. ID textures go with their maps. A frame that draws
+    /// no maps (volumes only) keeps them all, so that a run switching between maps and volumes
+    /// every frame creates no GL objects.
+    pub fn release_unlike(&mut self, gl: &glow::Context, kinds: &[MapKey]) {
+        if kinds.is_empty() {
+            return;
+        }
+        self.slots.retain(|_, s| {
+            let keep = kinds.iter().any(|k| {
+                MapKey {
+                    cube: s.key.cube,
+                    ..*k
+                } == s.key
+            });
+            if !keep {
+                // SAFETY: our texture; no view of this frame reads it.
+                unsafe { gl.delete_texture(s.texture) };
+            }
+            keep
+        });
+        let slots = &self.slots;
+        self.ids.retain(|at, (t, size)| {
+            let keep = slots
+                .get(at)
+                .is_some_and(|s| s.key.buffer == MapBuffer::Id && s.key.size == *size);
+            if !keep {
+                // SAFETY: our texture; its map is gone or stores no IDs.
+                unsafe { gl.delete_texture(*t) };
+            }
+            keep
+        });
     }
 
     /// Records what `light`'s view `view` now holds.

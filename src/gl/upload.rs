@@ -308,3 +308,33 @@ pub(crate) fn buffer_data<T: Plain>(gl: &glow::Context, target: u32, data: &[T],
     // SAFETY: a plain upload into the bound buffer.
     unsafe { gl.buffer_data_u8_slice(target, bytes_of(data), usage) }
 }
+
+/// A vertex array with its vertex buffer and index buffer: one light's volumes (`gl::volumes`),
+/// one caster group's extrusion mesh (`gl::extrusion`).
+pub(crate) struct Buffers {
+    pub vao: glow::VertexArray,
+    pub vbo: glow::Buffer,
+    pub ebo: glow::Buffer,
+}
+
+impl Buffers {
+    pub fn new(gl: &glow::Context) -> Result<Buffers, String> {
+        // SAFETY: a vertex array and two buffers of our own.
+        unsafe {
+            Ok(Buffers {
+                vao: gl.create_vertex_array()?,
+                vbo: gl.create_buffer()?,
+                ebo: gl.create_buffer()?,
+            })
+        }
+    }
+
+    pub fn delete(&self, gl: &glow::Context) {
+        // SAFETY: our own objects, deleted once (their owner is dropped with them).
+        unsafe {
+            gl.delete_vertex_array(self.vao);
+            gl.delete_buffer(self.vbo);
+            gl.delete_buffer(self.ebo);
+        }
+    }
+}

@@ -2,40 +2,10 @@
 //! [`LightVolumeDraws`](crate::plan::volume_draws::LightVolumeDraws) say what to upload and
 //! what to draw; this module holds the buffers and uploads.
 
-use super::upload::buffer_data;
+use super::upload::{Buffers, buffer_data};
 use crate::plan::volume_draws::{LightVolumeDraws, PartRange, VolumeDraw};
 use glow::HasContext;
 use std::collections::HashMap;
-
-/// A vertex array with its vertex buffer and index buffer: one light's volumes here, one
-/// caster group's extrusion mesh in `gl::extrusion`.
-pub(crate) struct Buffers {
-    pub vao: glow::VertexArray,
-    pub vbo: glow::Buffer,
-    pub ebo: glow::Buffer,
-}
-
-impl Buffers {
-    pub fn new(gl: &glow::Context) -> Result<Buffers, String> {
-        // SAFETY: a vertex array and two buffers of our own.
-        unsafe {
-            Ok(Buffers {
-                vao: gl.create_vertex_array()?,
-                vbo: gl.create_buffer()?,
-                ebo: gl.create_buffer()?,
-            })
-        }
-    }
-
-    pub fn delete(&self, gl: &glow::Context) {
-        // SAFETY: our own objects, deleted once (their owner is dropped with them).
-        unsafe {
-            gl.delete_vertex_array(self.vao);
-            gl.delete_buffer(self.vbo);
-            gl.delete_buffer(self.ebo);
-        }
-    }
-}
 
 /// A light's volume draws with the vertex array they read.
 #[derive(Clone, Copy)]

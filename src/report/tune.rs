@@ -16,28 +16,43 @@ use serde::Serialize;
 use std::collections::{BTreeMap, HashSet};
 use std::time::Instant;
 
-/// One searched option: its key, its values, and the technique it matters to (None: every one).
+/// One searched option: its key, its values, and the techniques it matters to.
 #[derive(Debug, Clone)]
 pub struct Dimension {
     pub key: &'static str,
     pub values: &'static [&'static str],
-    pub technique: Option<Technique>,
+    pub scope: Scope,
 }
 
-const fn dim(
-    key: &'static str,
-    values: &'static [&'static str],
-    technique: Option<Technique>,
-) -> Dimension {
-    Dimension {
-        key,
-        values,
-        technique,
+/// The techniques an option matters to: a draw sets it only for those, so that two
+/// configurations never differ in an option their technique ignores.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Scope {
+    Every,
+    /// Every technique that draws maps (the map options).
+    Maps,
+    /// Every technique that counts volumes (the volume options).
+    Volumes,
+    Only(Technique),
+}
+
+impl Scope {
+    fn applies(self, t: Technique) -> bool {
+        match self {
+            Scope::Every => true,
+            Scope::Maps => t.uses_maps(),
+            Scope::Volumes => t.uses_volumes(),
+            Scope::Only(own) => own == t,
+        }
     }
 }
 
-const SM: Option<Technique> = Some(Technique::ShadowMap);
-const SV: Option<Technique> = Some(Technique::ShadowVolume);
+const fn dim(key: &'static str, values: &'static [&'static str], scope: Scope) -> Dimension {
+    Dimension { key, values, scope }
+}
+
+const SM: Scope = Scope::Maps;
+const SV: Scope = Scope::Volumes;
 
 /// The option space searched: the choices the reports show to matter for time or error.
 pub fn space() -> Vec<Dimension> {
@@ -49,10 +64,11 @@ pub fn space() -> Vec<Dimension> {
         dim("shadow_map.offset_units", &["0", "4", "16", "64"], SM),
         dim("shadow_map.cull", &["both", "front", "back"], SM),
         dim("shadow_map.omni", &["six_spots", "cube"], SM),
+        // What the map stores: standard maps only (`Options::map_buffer`).
         dim(
             "shadow_map.buffer",
             &["depth", "id", "priority", "priority_depth"],
-            SM,
+            Scope::Only(Technique::ShadowMap),
         ),
         dim("shadow_volume.counting", &["zfail", "zpass", "auto"], SV),
         dim("shadow_volume.stencil", &["two_pass", "separate"], SV),
@@ -61,15 +77,15 @@ pub fn space() -> Vec<Dimension> {
         dim(
             "psm.min_near",
             &["0.01", "0.05", "0.2"],
-            Some(Technique::Psm),
+            Scope::Only(Technique::Psm),
         ),
         dim(
             "psm.tsm_focus",
             &["0.1", "0.2", "0.5"],
-            Some(Technique::Tsm),
+            Scope::Only(Technique::Tsm),
         ),
-        dim("hybrid.radius", &["1", "2"], Some(Technique::Hybrid)),
-        dim("plan.enabled", &["true", "false"], None),
+        dim("hybrid.radius", &["1", "2"], Scope::Only(Technique::Hybrid)),
+        dim("plan.enabled", &["true", "false"], Scope::Every),
     ]
 }
 
@@ -81,18 +97,6 @@ pub const TECHNIQUES: [Technique; 5] = [
     Technique::Tsm,
     Technique::Hybrid,
 ];
-
-/// Whether a dimension of technique `of` applies to a configuration running `t`: the shadow
-/// map's options to every technique that draws maps, the volumes' to every one that counts
-/// volumes, the others to their own.
-fn applies(of: Option<Technique>, t: Technique) -> bool {
-    match of {
-        None => true,
-        Some(Technique::ShadowMap) => t.uses_maps(),
-        Some(Technique::ShadowVolume) => t.uses_volumes(),
-        Some(own) => own == t,
-    }
-}
 
 /// A configuration of the space: `base` with the values set; its label names the technique and
 /// the values that differ from `base`.
@@ -138,7 +142,7 @@ pub fn candidates(
         tries += 1;
         let t = TECHNIQUES[rng.usize(..TECHNIQUES.len())];
         let mut sets = BTreeMap::from([("technique".to_string(), t.to_string())]);
-        for d in space.iter().filter(|d| applies(d.technique, t)) {
+        for d in space.iter().filter(|d| d.scope.applies(t)) {
             sets.insert(
                 d.key.to_string(),
                 d.values[rng.usize(..d.values.len())].to_string(),
@@ -603,6 +607,7 @@ mod tests {
                 let forbidden = [
                     ("shadow_map.", !t.uses_maps()),
                     ("shadow_volume.", !t.uses_volumes()),
+                    ("shadow_map.buffer", t != Technique::ShadowMap),
                     ("psm.min_near", t != Technique::Psm),
                     ("psm.tsm_focus", t != Technique::Tsm),
                     ("hybrid.", t != Technique::Hybrid),

@@ -226,16 +226,16 @@ fn split(poly: &[DVec3], plane: &Plane) -> (Vec<DVec3>, Vec<DVec3>) {
     (inside, outside)
 }
 
+/// The sum of a polygon's fan cross products: along its normal, twice its area long.
+fn area_normal(poly: &[DVec3]) -> DVec3 {
+    (1..poly.len().saturating_sub(1))
+        .map(|i| (poly[i] - poly[0]).cross(poly[i + 1] - poly[0]))
+        .sum()
+}
+
 /// Whether the polygon has an area worth keeping (not a sliver left by splitting at a vertex).
 fn has_area(poly: &[DVec3]) -> bool {
-    if poly.len() < 3 {
-        return false;
-    }
-    let mut n = DVec3::ZERO;
-    for i in 1..poly.len() - 1 {
-        n += (poly[i] - poly[0]).cross(poly[i + 1] - poly[0]);
-    }
-    n.length() > 1e-12
+    poly.len() >= 3 && area_normal(poly).length() > 1e-12
 }
 
 /// Cuts the lit pieces of one receiver by one volume: the parts inside it become shadowed.
@@ -328,8 +328,16 @@ pub fn subdivide(scene: &Scene, index: usize) -> Result<LightSubdivision, Subdiv
         .lights
         .get(index)
         .ok_or(SubdivisionError::NoSuchLight(index))?;
+    subdivide_triangles(index, light, triangles_in_range(scene, light))
+}
+
+/// [`subdivide`] over `triangles`, those in `light`'s range.
+fn subdivide_triangles(
+    index: usize,
+    light: &Light,
+    triangles: Vec<Triangle>,
+) -> Result<LightSubdivision, SubdivisionError> {
     let start = Instant::now();
-    let triangles = triangles_in_range(scene, light);
     let at = light.position.as_dvec3();
     let mut casters: Vec<Triangle> = triangles
         .iter()
@@ -452,11 +460,7 @@ impl LightSubdivision {
 
 /// Whether the segment from `from` along unit `dir` for `length` crosses convex polygon `poly`.
 fn probe_hits(from: DVec3, dir: DVec3, length: f64, poly: &[DVec3]) -> bool {
-    let normal = (poly[1] - poly[0]).cross(poly[2] - poly[0]);
-    let mut n = normal;
-    for i in 2..poly.len() - 1 {
-        n += (poly[i] - poly[0]).cross(poly[i + 1] - poly[0]);
-    }
+    let n = area_normal(poly);
     let denom = n.dot(dir);
     if denom == 0.0 {
         return false;
@@ -489,10 +493,9 @@ pub fn default_cache_dir() -> Option<PathBuf> {
     Some(base.join("shadowlab").join("subdivision"))
 }
 
-/// A hash of everything the subdivision of `index` depends on: the light's position and
-/// range and every triangle in range (FNV-1a over their bits).
-fn content_key(scene: &Scene, index: usize) -> u64 {
-    let light = &scene.lights[index];
+/// A hash of everything a light's subdivision depends on: the light's position and range and
+/// every triangle in range (FNV-1a over their bits).
+fn content_key(light: &Light, triangles: &[Triangle]) -> u64 {
     let mut h: u64 = 0xcbf2_9ce4_8422_2325 ^ CACHE_VERSION as u64;
     let mut eat = |x: u64| {
         for b in x.to_le_bytes() {
@@ -504,7 +507,7 @@ fn content_key(scene: &Scene, index: usize) -> u64 {
         eat(c.to_bits() as u64);
     }
     eat(light.radius.to_bits() as u64);
-    for t in triangles_in_range(scene, light) {
+    for t in triangles {
         for p in t.v {
             for c in p.to_array() {
                 eat(c.to_bits());
@@ -516,16 +519,13 @@ fn content_key(scene: &Scene, index: usize) -> u64 {
 }
 
 /// The cache file of light `index` of `scene`, named by map and light and keyed by content.
-pub fn cache_path(dir: &Path, scene: &Scene, index: usize) -> PathBuf {
+fn cache_path(dir: &Path, scene: &Scene, index: usize, key: u64) -> PathBuf {
     let map: String = scene
         .name
         .chars()
         .map(|c| if c.is_ascii_alphanumeric() { c } else { '_' })
         .collect();
-    dir.join(format!(
-        "{map}-light{index}-{:016x}.bin",
-        content_key(scene, index)
-    ))
+    dir.join(format!("{map}-light{index}-{key:016x}.bin"))
 }
 
 /// [`subdivide`], read from `dir` when it holds this light's subdivision of the same
@@ -535,10 +535,12 @@ pub fn subdivide_cached(
     index: usize,
     dir: &Path,
 ) -> Result<LightSubdivision, SubdivisionError> {
-    if index >= scene.lights.len() {
-        return Err(SubdivisionError::NoSuchLight(index));
-    }
-    let path = cache_path(dir, scene, index);
+    let light = scene
+        .lights
+        .get(index)
+        .ok_or(SubdivisionError::NoSuchLight(index))?;
+    let triangles = triangles_in_range(scene, light);
+    let path = cache_path(dir, scene, index, content_key(light, &triangles));
     if let Ok(bytes) = std::fs::read(&path)
         && let Some(fragments) = decode(&bytes)
     {
@@ -557,7 +559,7 @@ pub fn subdivide_cached(
         };
         return Ok(LightSubdivision::new(index, stats, fragments));
     }
-    let sub = subdivide(scene, index)?;
+    let sub = subdivide_triangles(index, light, triangles)?;
     let io = |source| SubdivisionError::Cache {
         path: path.clone(),
         source,
@@ -646,11 +648,7 @@ mod tests {
     }
 
     fn area(poly: &[DVec3]) -> f64 {
-        let mut n = DVec3::ZERO;
-        for i in 1..poly.len() - 1 {
-            n += (poly[i] - poly[0]).cross(poly[i + 1] - poly[0]);
-        }
-        0.5 * n.length()
+        0.5 * area_normal(poly).length()
     }
 
     #[test]
