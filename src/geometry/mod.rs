@@ -2,6 +2,7 @@
 //! matrices.
 
 pub mod aabb;
+pub mod clip;
 pub mod frustum;
 pub mod overlap;
 pub mod projection;

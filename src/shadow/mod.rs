@@ -2,6 +2,7 @@
 
 pub mod edges;
 pub mod extrusion;
+pub mod frusta;
 pub mod parts;
 pub mod views;
 pub mod volume;

@@ -14,6 +14,7 @@
 //! compare needs: a trapezoidal map scales each ray's depths by its own positive constant.
 
 use crate::geometry::Aabb;
+use crate::geometry::clip::clip_box;
 use crate::geometry::frustum::sides_and_near;
 use crate::options::{PsmOptions, Warp};
 use crate::scene::Camera;
@@ -128,86 +129,6 @@ fn focus_points(input: &WarpInput, fit: bool, extra: Option<Vec4>) -> Vec<Vec3> 
         clip_box(b, &planes, &mut points);
     }
     points
-}
-
-/// Appends the vertices of box `b` clipped by `planes`.
-fn clip_box(b: &Aabb, planes: &[Vec4], out: &mut Vec<Vec3>) {
-    let corners = b.corners();
-    let inside = |p: &Vec3, pl: &Vec4| pl.xyz().dot(*p) + pl.w >= 0.0;
-    if planes
-        .iter()
-        .any(|pl| corners.iter().all(|c| !inside(c, pl)))
-    {
-        return;
-    }
-    if planes
-        .iter()
-        .all(|pl| corners.iter().all(|c| inside(c, pl)))
-    {
-        out.extend_from_slice(&corners);
-        return;
-    }
-    let (lo, hi) = (b.min, b.max);
-    let faces: [[Vec3; 4]; 6] = [
-        [
-            lo,
-            lo.with_y(hi.y),
-            lo.with_y(hi.y).with_z(hi.z),
-            lo.with_z(hi.z),
-        ],
-        [
-            hi.with_y(lo.y).with_z(lo.z),
-            hi.with_z(lo.z),
-            hi,
-            hi.with_y(lo.y),
-        ],
-        [
-            lo,
-            lo.with_x(hi.x),
-            lo.with_x(hi.x).with_z(hi.z),
-            lo.with_z(hi.z),
-        ],
-        [
-            lo.with_y(hi.y),
-            hi.with_z(lo.z),
-            hi,
-            lo.with_y(hi.y).with_z(hi.z),
-        ],
-        [lo, lo.with_x(hi.x), hi.with_z(lo.z), lo.with_y(hi.y)],
-        [
-            lo.with_z(hi.z),
-            hi.with_y(lo.y),
-            hi,
-            lo.with_y(hi.y).with_z(hi.z),
-        ],
-    ];
-    for face in faces {
-        let mut poly = face.to_vec();
-        for pl in planes {
-            poly = clip_polygon(&poly, *pl);
-            if poly.is_empty() {
-                break;
-            }
-        }
-        out.extend(poly);
-    }
-}
-
-/// Sutherland–Hodgman: the part of convex polygon `poly` inside `plane`.
-fn clip_polygon(poly: &[Vec3], plane: Vec4) -> Vec<Vec3> {
-    let dist = |p: Vec3| plane.xyz().dot(p) + plane.w;
-    let mut out = Vec::with_capacity(poly.len() + 1);
-    for (i, &a) in poly.iter().enumerate() {
-        let b = poly[(i + 1) % poly.len()];
-        let (da, db) = (dist(a), dist(b));
-        if da >= 0.0 {
-            out.push(a);
-        }
-        if (da >= 0.0) != (db >= 0.0) {
-            out.push(a + (b - a) * (da / (da - db)));
-        }
-    }
-    out
 }
 
 /// Per caster box, its part that may shadow a focus point (None: none): the box clipped to the
@@ -535,20 +456,6 @@ mod tests {
         };
         let (dx, dy) = (at(p + Vec3::X) - at(p), at(p + Vec3::Y) - at(p));
         (dx.x * dy.y - dx.y * dy.x).abs().sqrt()
-    }
-
-    #[test]
-    fn polygons_clip_to_the_inside() {
-        let square = [
-            Vec3::new(-1.0, -1.0, 0.0),
-            Vec3::new(1.0, -1.0, 0.0),
-            Vec3::new(1.0, 1.0, 0.0),
-            Vec3::new(-1.0, 1.0, 0.0),
-        ];
-        let half = clip_polygon(&square, Vec4::new(1.0, 0.0, 0.0, 0.0));
-        assert_eq!(half.len(), 4);
-        assert!(half.iter().all(|p| p.x >= 0.0));
-        assert!(clip_polygon(&square, Vec4::new(1.0, 0.0, 0.0, -2.0)).is_empty());
     }
 
     #[test]
