@@ -37,6 +37,9 @@ in vec2 v_shadow_ref;
 uniform float u_priority_bias; // shadow_map.priority_bias
 #endif
 uniform int u_face;           // six-spot omni light: the cube face this pass lights; -1: all
+uniform vec4 u_cell;          // one of several frusta: (min, max) of its cell of the face's image
+                              // plane (shadow/frusta.rs); min > max: the whole face
+uniform mat3 u_face_rot;      // the face view's rotation: light-relative world to its eye space
 uniform int u_sm_alpha_func;  // glAlphaFunc emulation: 0 NEVER .. 7 ALWAYS (options AlphaTestFunc)
 uniform float u_sm_alpha_ref;
 #ifdef HYBRID
@@ -49,6 +52,16 @@ int major_face(vec3 d) {
     if (a.x >= a.y && a.x >= a.z) return d.x >= 0.0 ? 0 : 1;
     if (a.y >= a.z) return d.y >= 0.0 ? 2 : 3;
     return d.z >= 0.0 ? 4 : 5;
+}
+
+// Whether d (from the light) falls in this pass's cell. Half-open, so a fragment on an edge two
+// cells share is lit once; the face's own edges are closed (major_face already decided there).
+bool in_cell(vec3 d) {
+    if (u_cell.x > u_cell.z) return true;
+    vec3 e = u_face_rot * d;
+    vec2 q = e.xy / -e.z;
+    return (q.x >= u_cell.x || u_cell.x <= -1.0) && (q.y >= u_cell.y || u_cell.y <= -1.0)
+        && (q.x < u_cell.z || u_cell.z >= 1.0) && (q.y < u_cell.w || u_cell.w >= 1.0);
 }
 
 bool alpha_test(int func, float a, float ref) {
@@ -108,7 +121,9 @@ out vec4 o_color;
 void main() {
 #ifdef SHADOW_MAP
     // One of an omni light's six spots: fragments of the other faces leave before any work.
-    if (u_face >= 0 && major_face(v_world - u_light_pos) != u_face) discard;
+    // One of several frusta: fragments of the other cells leave too.
+    if (u_face >= 0 && (major_face(v_world - u_light_pos) != u_face || !in_cell(v_world - u_light_pos)))
+        discard;
 #endif
     vec4 albedo = texture(u_texture, v_uv);
     if (!q3_alpha_passes(u_alpha_func, albedo.a)) discard;
@@ -191,6 +206,14 @@ void main() {
 #endif
     ivec2 cell = ivec2(floor(texel));
     if (((cell.x + cell.y) & 1) == 1) o_color.rgb *= vec3(0.55, 0.6, 1.0);
+#if !defined(SHADOW_CUBE) && !defined(SIX_SPOTS)
+    // Multiple frusta: each frustum's squares take a tint of their own, so the frusta and
+    // their texel sizes show side by side.
+    if (u_cell.x <= u_cell.z) {
+        float k = fract(dot(u_cell.xy + 1.0, vec2(0.37, 0.61)) + float(u_face) * 0.13);
+        o_color.rgb *= 0.75 + 0.25 * cos(6.2832 * (k + vec3(0.0, 0.33, 0.67)));
+    }
+#endif
 #endif
 #endif
 }

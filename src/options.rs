@@ -642,6 +642,11 @@ option_enum! {
         SixSpots = "six_spots",
         /// One depth cube map and one lit pass.
         Cube = "cube",
+        /// Several frusta around the receivers in view (Forsyth's multiple frustums), each a
+        /// rectangle of a cube face with its own map size, sized by the texels per unit the
+        /// receivers' size on screen asks for, within the texels of six faces of
+        /// `shadow_map.size` (`shadow::frusta`).
+        Frusta = "frusta",
     }
 }
 
@@ -955,8 +960,12 @@ define_options! {
         /// Fit near and far to the casters in the light's view (thesis 2.2.2); off: near 1, far =
         /// the light's radius.
         fit_near_far: bool = true;
-        /// Omni lights as six 90-degree spot lights (paper) or one cube map.
+        /// Omni lights as six 90-degree spot lights (paper), one cube map, or several frusta
+        /// fitted to the receivers in view.
         omni: OmniMode = OmniMode::SixSpots;
+        /// `omni = frusta`: the most frusta per light (each is one more depth and lit pass);
+        /// a light has at least one per face with receivers.
+        max_frusta: u32 = 12, in 6 ..= 64;
         /// Alpha-tested casters: alpha test in the depth pass, or drawn solid.
         alpha_casters: AlphaCasters = AlphaCasters::Test;
         /// What the map stores: depth (the paper), IDs, priorities, or priorities with depth

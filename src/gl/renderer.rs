@@ -612,11 +612,12 @@ impl Renderer {
     /// The one limit no fallback lifts: a shadow map larger than the GL's textures. (Choices
     /// that need a missing feature were replaced before planning: `plan::fallback`.)
     fn check_support(&self, options: &Options, plan: &Plan) -> Result<(), RenderError> {
-        let size = options.shadow_map.size;
+        let size = plan.largest_map(options.shadow_map.size);
         let max = self.caps.max_texture_size.max(1) as u32;
         if plan.any_maps() && size > max {
             return Err(RenderError::Unsupported(format!(
-                "shadow_map.size = {size} exceeds GL_MAX_TEXTURE_SIZE {max}"
+                "a shadow map of {size}x{size} (shadow_map.size, or one of several frusta) \
+                 exceeds GL_MAX_TEXTURE_SIZE {max}"
             )));
         }
         if options.gl.pipeline == Pipeline::FixedFunction {
@@ -711,7 +712,8 @@ impl Renderer {
     ) -> Result<bool, RenderError> {
         let sm = &options.shadow_map;
         let copy = plan.any_maps() && copies_from_frame(sm);
-        let alloc = if copy { (sm.size, sm.size) } else { (0, 0) };
+        let largest = plan.largest_map(sm.size);
+        let alloc = if copy { (largest, largest) } else { (0, 0) };
         self.ensure_target(
             plan.camera.width,
             plan.camera.height,
@@ -1033,9 +1035,10 @@ impl<'a> FrameRun<'a> {
                 .map_err(RenderError::Gl)?;
             for (vi, view) in lp.views.iter().enumerate() {
                 let cube = view.kind == ViewKind::Cube;
+                let size = view.map_size(sm.size);
                 let kind = MapKey {
                     cube,
-                    size: sm.size,
+                    size,
                     bits: sm.depth_bits,
                     buffer,
                 };
@@ -1049,7 +1052,7 @@ impl<'a> FrameRun<'a> {
                 let ids = if buffer == MapBuffer::Id {
                     let (t, fresh) = self
                         .shadow_maps
-                        .id_texture(gl, lp.light, vi, sm.size)
+                        .id_texture(gl, lp.light, vi, size)
                         .map_err(RenderError::Gl)?;
                     if fresh {
                         holds = None;
@@ -1096,7 +1099,7 @@ impl<'a> FrameRun<'a> {
                     texture,
                     ids,
                     cube,
-                    size: sm.size,
+                    size,
                 });
                 maps.push(ViewMap {
                     plan_index: pi,
@@ -1121,7 +1124,7 @@ impl<'a> FrameRun<'a> {
         buffers: MapBuffers,
     ) -> Flow<()> {
         let gl = self.ctx.gl;
-        let size = self.ctx.options.shadow_map.size;
+        let size = lp.views[vi].map_size(self.ctx.options.shadow_map.size);
         let shown = face.or(Some(vi));
         let texture = buffers.depth;
         // ID buffers are drawn through the FBO: their IDs are colour, the frame's is not theirs.

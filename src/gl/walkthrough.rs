@@ -97,6 +97,13 @@ pub fn explain(step: &Step, options: &Options, executed: Executed) -> Explanatio
                          trapezoid is stretched onto the square map (Martin & Tan's 80% rule \
                          places its apex): the near field gets most of the texels."
                     }
+                    _ if sm.omni == crate::options::OmniMode::Frusta => {
+                        " With shadow_map.omni = frusta an omni light's views are several \
+                         frusta fitted around the receivers in view, each a rectangle of one \
+                         cube face with its own map size (the sizes above are the option's; \
+                         render --stats lists each light's frusta): receivers near the camera \
+                         get more texels per unit, those far off fewer."
+                    }
                     _ => "",
                 }
             ),

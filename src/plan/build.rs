@@ -10,10 +10,43 @@ use crate::options::{
     ShadowVolumeOptions, StencilPasses, Technique, VolumeCasters, VolumeProjection, Warp,
 };
 use crate::scene::{Camera, Light, LightKind, Scene, SurfaceOwner};
+use crate::shadow::frusta;
 use crate::shadow::views::{ViewKind, shadow_views};
 use crate::shadow::volume::{self, CasterGroup, CasterGroups, Counting, PieceRef};
 use crate::shadow::warp::{self, WarpInput};
 use glam::{Mat4, Vec3};
+
+/// The smallest map one of several frusta gets (`shadow_map.omni = frusta`).
+const MIN_FRUSTUM_SIZE: u32 = 32;
+/// The largest, unless `shadow_map.size` is larger: at most four times its side (GL 3.3
+/// guarantees 1024; the GL layer refuses a map past GL_MAX_TEXTURE_SIZE).
+const MAX_FRUSTUM_SIZE: u32 = 4096;
+
+/// The stats' line for a light's frusta: how many, their texels against the six faces' budget,
+/// and each one's face and map side.
+fn frusta_line(
+    light: usize,
+    views: &[crate::shadow::views::ShadowView],
+    o: &ShadowMapOptions,
+) -> String {
+    let texels: u64 = views
+        .iter()
+        .map(|v| u64::from(v.map_size(o.size)).pow(2))
+        .sum();
+    let each: Vec<String> = views
+        .iter()
+        .map(|v| match v.kind {
+            ViewKind::Face(f) => format!("{f}:{}", v.map_size(o.size)),
+            _ => format!("{}", v.map_size(o.size)),
+        })
+        .collect();
+    format!(
+        "light {light}: {} frusta, {texels} texels (six faces: {}): {}",
+        views.len(),
+        6 * u64::from(o.size).pow(2),
+        each.join(" ")
+    )
+}
 
 /// A hash of anything hashable.
 fn hash_of(v: impl std::hash::Hash) -> u64 {
@@ -480,7 +513,17 @@ impl FrameFacts<'_> {
         } else {
             &self.map_options
         };
-        plan.views = shadow_views(view_light, &self.caster_bounds, map_options);
+        plan.views = match map_options.omni {
+            OmniMode::Frusta if view_light.kind == LightKind::Omni => self
+                .frusta_views(view_light, &plan.receivers, map_options)
+                .inspect(|views| {
+                    stats
+                        .frusta
+                        .push(frusta_line(plan.light, views, map_options))
+                }),
+            _ => None,
+        }
+        .unwrap_or_else(|| shadow_views(view_light, &self.caster_bounds, map_options));
         let light_key = hash_of((
             &self.map_options_text,
             plan.order,
@@ -491,8 +534,19 @@ impl FrameFacts<'_> {
         for vi in 0..plan.views.len() {
             let view = &plan.views[vi];
             let mut drawn = self.map_casters(l, view.kind, &view.view_proj());
-            let lit: Vec<u32> = match view.kind {
-                ViewKind::Face(f) if on && p.cull_receivers => {
+            let lit: Vec<u32> = match (view.kind, view.part) {
+                // One of several frusta lights only the receivers in its cell.
+                (ViewKind::Face(f), Some(part)) => plan
+                    .receivers
+                    .iter()
+                    .copied()
+                    .filter(|&s| {
+                        let b = &self.scene.surfaces[s as usize].bounds;
+                        frusta::footprint(l.position, f, b)
+                            .is_some_and(|r| r.intersection(&part.cell).is_some())
+                    })
+                    .collect(),
+                (ViewKind::Face(f), None) if on && p.cull_receivers => {
                     let pyramid = cull::face_pyramid(l.position, f);
                     plan.receivers
                         .iter()
@@ -519,6 +573,7 @@ impl FrameFacts<'_> {
         }
         plan.merged = on
             && p.merge_faces
+            && plan.views.iter().all(|v| v.part.is_none())
             && self.options.shadow_map.outside != Outside::ClipPlanes
             && plan.views.len() == 6
             && plan
@@ -534,6 +589,38 @@ impl FrameFacts<'_> {
             return Some("no caster in range");
         }
         None
+    }
+
+    /// Several frusta around the receivers in view of omni light `l` (`shadow_map.omni =
+    /// frusta`), each asking for the screen pixels a world unit covers at its distance from the
+    /// camera; None where no receiver is beyond the near plane (the six faces then).
+    fn frusta_views(
+        &self,
+        l: &Light,
+        receivers: &[u32],
+        o: &ShadowMapOptions,
+    ) -> Option<Vec<crate::shadow::views::ShadowView>> {
+        // Pixels per world unit at distance 1: half the height over tan(fovy / 2).
+        let pixels = 0.5 * self.camera.height as f32 * self.camera.projection.y_axis.y.abs();
+        let eye = frusta::Eye {
+            position: self.scene_camera.position,
+            pixels,
+            near: self.near,
+            screen: self.camera.width.max(self.camera.height) as f32,
+        };
+        let mut needs = Vec::new();
+        for &s in receivers {
+            frusta::receiver_needs(self.scene.surfaces[s as usize].bounds, &eye, &mut needs);
+        }
+        let budget = frusta::Budget {
+            texels: 6 * u64::from(o.size).pow(2),
+            max_frusta: o.max_frusta as usize,
+            min_size: MIN_FRUSTUM_SIZE.min(o.size),
+            max_size: o.size.max((4 * o.size).min(MAX_FRUSTUM_SIZE)),
+        };
+        let chosen = frusta::choose(l.position, &needs, &budget);
+        (!chosen.is_empty())
+            .then(|| frusta::frustum_views(l, &chosen, &self.caster_bounds, o.fit_near_far))
     }
 
     /// Replaces view `vi` of a `psm` or `tsm` light by its warp (`shadow::warp`), fitted to the
@@ -634,6 +721,7 @@ impl FrameFacts<'_> {
             light_key,
             mat_bits(&view.view_proj()),
             format!("{:?}", view.kind),
+            view.part.map(|p| p.size),
             drawn,
             moving,
         ))

@@ -4,9 +4,10 @@
 //!
 //! Legacy GL has no program to compare depths (`shadow_map.compare = shader`), to average
 //! several compares (`pcf3x3`, `pcf`: the hardware's 2x2 LINEAR filter is the one it has),
-//! to compare against a depth cube map (omni lights take the paper's six spot maps), to light
-//! six faces in one pass, to set the stencil of both faces in one pass (no
-//! glStencilOpSeparate in the paper's GL) or to clip volumes by clip distances.
+//! to compare against a depth cube map or keep each of several frusta to its cell (omni
+//! lights take the paper's six spot maps), to light six faces in one pass, to set the stencil
+//! of both faces in one pass (no glStencilOpSeparate in the paper's GL) or to clip volumes by
+//! clip distances.
 
 use super::fallback::Fallback;
 use crate::options::{Compare, Filter, OmniMode, Options, Pipeline, StencilPasses};
@@ -49,7 +50,8 @@ pub fn resolve(options: &Options) -> (Options, Vec<Fallback>) {
     if matches!(o.shadow_map.filter, Filter::Pcf3x3 | Filter::Pcf) {
         replace("shadow_map.filter", &mut o, "hw2x2");
     }
-    if o.shadow_map.omni == OmniMode::Cube {
+    // Cube maps need the shaders' cube lookups; frusta their per-cell discard.
+    if matches!(o.shadow_map.omni, OmniMode::Cube | OmniMode::Frusta) {
         replace("shadow_map.omni", &mut o, "six_spots");
     }
     // ID and priority buffers need shaders (gl_PrimitiveID, the table lookups).
@@ -92,12 +94,15 @@ mod tests {
         o.set("gl.pipeline", "fixed_function").unwrap();
         o.set("shadow_map.filter", "pcf3x3").unwrap();
         o.set("shadow_map.compare", "shader").unwrap();
+        o.set("shadow_map.omni", "frusta").unwrap();
         let (ff, taken) = resolve(&o);
         assert_eq!(ff.shadow_map.filter, Filter::Hw2x2);
+        assert_eq!(ff.shadow_map.omni, OmniMode::SixSpots);
         assert_eq!(ff.shadow_map.compare, Compare::Hardware);
         assert!(!ff.plan.omni_cube && !ff.plan.one_pass_stencil && !ff.plan.depth_clip);
         let keys: Vec<&str> = taken.iter().map(|f| f.option).collect();
         assert!(keys.contains(&"shadow_map.filter") && keys.contains(&"plan.depth_clip"));
+        assert!(keys.contains(&"shadow_map.omni"));
         assert!(taken.iter().all(|f| f.feature == "fixed_function"));
         // What was replaced needs no second replacement, and the paper's frame none at all.
         let (_, none) = resolve(&ff);

@@ -200,6 +200,9 @@ pub struct PlanStats {
     pub warps: Vec<String>,
     /// Views of warped lights that fell back to a standard map.
     pub warp_fallbacks: usize,
+    /// Per omni light under `shadow_map.omni = frusta`: "light i: n frusta, t texels (the six
+    /// faces' budget b): face/size ...".
+    pub frusta: Vec<String>,
 }
 
 /// Everything the passes need to know for one frame.
@@ -228,6 +231,17 @@ impl Plan {
     /// Whether some planned light draws shadow maps.
     pub fn any_maps(&self) -> bool {
         self.lights.iter().any(|l| l.technique.uses_maps())
+    }
+
+    /// The largest shadow map of the frame's views (`size` where every view has the
+    /// option's own); 0 without maps.
+    pub fn largest_map(&self, size: u32) -> u32 {
+        self.lights
+            .iter()
+            .filter(|l| l.technique.uses_maps())
+            .flat_map(|l| l.views.iter().map(|v| v.map_size(size)))
+            .max()
+            .unwrap_or(0)
     }
 
     /// Whether some planned light counts shadow volumes.

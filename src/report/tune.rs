@@ -63,7 +63,7 @@ pub fn space() -> Vec<Dimension> {
         dim("shadow_map.offset_factor", &["0", "1.1", "2", "4"], SM),
         dim("shadow_map.offset_units", &["0", "4", "16", "64"], SM),
         dim("shadow_map.cull", &["both", "front", "back"], SM),
-        dim("shadow_map.omni", &["six_spots", "cube"], SM),
+        dim("shadow_map.omni", &["six_spots", "cube", "frusta"], SM),
         // What the map stores: standard maps only (`Options::map_buffer`).
         dim(
             "shadow_map.buffer",

@@ -18,12 +18,16 @@
 use crate::geometry::Aabb;
 use crate::geometry::clip::clip_box;
 use crate::geometry::projection::cube_face_view;
-use crate::shadow::views::MIN_NEAR;
+use crate::scene::Light;
+use crate::shadow::views::{FacePart, MIN_NEAR, Rect, ShadowView, ViewKind, near_far};
 use glam::{Mat4, Vec2, Vec3, Vec4};
 
 /// A split is taken only when the quadrants need at most this share of their parent's texels
 /// (less saving is not worth a pass).
 pub const SPLIT_GAIN: f64 = 0.75;
+/// Texels of a frustum's map beyond its rectangle on each side: room for a 5x5 filter
+/// (`shadow_map.pcf_size` 5) and a texel of rounding.
+pub const MARGIN_TEXELS: u32 = 1;
 /// Quadtree depth: a frustum is at least 1/2⁴ of a face across.
 pub const MAX_DEPTH: u32 = 4;
 
@@ -34,72 +38,60 @@ pub struct Need {
     /// Map texels per world unit its size on screen asks for (about the screen pixels one world
     /// unit covers where it is).
     pub texels_per_unit: f32,
+    /// How many screen pixels its shadows' errors can spread over: its size on screen, in
+    /// pixels (the weight of its share of the budget).
+    pub weight: f32,
 }
 
-/// A rectangle of a face's image plane.
+/// Where the receivers are seen from, for [`receiver_needs`].
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Rect {
-    pub min: Vec2,
-    pub max: Vec2,
+pub struct Eye {
+    pub position: Vec3,
+    /// Screen pixels per world unit at distance 1 (half the frame's height over tan(fovy/2)).
+    pub pixels: f32,
+    /// Nothing is nearer than this (the camera's near plane).
+    pub near: f32,
+    /// The frame's larger side: no receiver is larger on screen.
+    pub screen: f32,
 }
 
-impl Rect {
-    /// The whole face.
-    pub const FACE: Rect = Rect {
-        min: Vec2::NEG_ONE,
-        max: Vec2::ONE,
-    };
+/// Times a receiver's box is halved at most for [`receiver_needs`] (up to 2⁴ pieces).
+pub const NEED_SPLITS: u32 = 4;
 
-    fn union(&self, o: &Rect) -> Rect {
-        Rect {
-            min: self.min.min(o.min),
-            max: self.max.max(o.max),
+/// What a receiver with box `bounds` asks for, seen from `eye`: the pixels per unit at its
+/// nearest point, weighted by its size on screen. A box longer than its distance from the eye
+/// is halved along its longest side first (up to [`NEED_SPLITS`] times), so that a floor
+/// passing under the camera asks for many texels only where it is near.
+pub fn receiver_needs(bounds: Aabb, eye: &Eye, out: &mut Vec<Need>) {
+    fn split(b: Aabb, eye: &Eye, depth: u32, out: &mut Vec<Need>) {
+        let p = eye.position;
+        let distance = p.clamp(b.min, b.max).distance(p).max(eye.near);
+        let extent = b.max - b.min;
+        let long = extent.max_element();
+        if depth < NEED_SPLITS && long > distance {
+            let axis = if extent.x == long {
+                0
+            } else if extent.y == long {
+                1
+            } else {
+                2
+            };
+            let mid = (b.min[axis] + b.max[axis]) * 0.5;
+            let (mut lo, mut hi) = (b, b);
+            lo.max[axis] = mid;
+            hi.min[axis] = mid;
+            split(lo, eye, depth + 1, out);
+            split(hi, eye, depth + 1, out);
+            return;
         }
+        let texels_per_unit = eye.pixels / distance;
+        out.push(Need {
+            bounds: b,
+            texels_per_unit,
+            weight: (long * texels_per_unit).min(eye.screen),
+        });
     }
-
-    /// The common part, edges included (a receiver seen edge-on is a line and still counts).
-    fn intersection(&self, o: &Rect) -> Option<Rect> {
-        let (min, max) = (self.min.max(o.min), self.max.min(o.max));
-        (min.x <= max.x && min.y <= max.y).then_some(Rect { min, max })
-    }
-
-    /// The longer side: a square map over the rectangle has `size / side` texels per plane unit
-    /// in its coarser direction.
-    pub fn side(&self) -> f32 {
-        (self.max - self.min).max_element()
-    }
-
-    pub fn contains(&self, p: Vec2) -> bool {
-        p.cmpge(self.min).all() && p.cmple(self.max).all()
-    }
-
-    /// Whether the two share more than an edge.
-    pub fn overlaps(&self, o: &Rect) -> bool {
-        let (min, max) = (self.min.max(o.min), self.max.min(o.max));
-        min.x < max.x && min.y < max.y
-    }
-
-    fn quadrants(&self) -> [Rect; 4] {
-        let c = (self.min + self.max) * 0.5;
-        [
-            Rect {
-                min: self.min,
-                max: c,
-            },
-            Rect {
-                min: Vec2::new(c.x, self.min.y),
-                max: Vec2::new(self.max.x, c.y),
-            },
-            Rect {
-                min: Vec2::new(self.min.x, c.y),
-                max: Vec2::new(c.x, self.max.y),
-            },
-            Rect {
-                min: c,
-                max: self.max,
-            },
-        ]
-    }
+    split(bounds, eye, 0, out);
 }
 
 /// How many texels a light's frusta may have in all, and in how many maps.
@@ -117,7 +109,10 @@ pub struct Budget {
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct FaceFrustum {
     pub face: usize,
+    /// What the receivers cover of the cell: the map's extent.
     pub rect: Rect,
+    /// The quadtree cell it lights (the whole face when the face is not split).
+    pub cell: Rect,
     pub size: u32,
 }
 
@@ -127,9 +122,15 @@ impl FaceFrustum {
         cube_face_view(light, self.face)
     }
 
-    /// The off-centre frustum over the rectangle (glFrustum's).
+    /// The off-centre frustum over the rectangle (glFrustum's), widened by `MARGIN_TEXELS` on
+    /// each side so that filters reading around a texel at the rectangle's edge read receivers,
+    /// not the clamped edge.
     pub fn projection(&self, near: f32, far: f32) -> Mat4 {
-        let (lo, hi) = (self.rect.min * near, self.rect.max * near);
+        let n = self.size.max(2 * MARGIN_TEXELS + 1) as f32;
+        // The rectangle spans n - 2m texels of the widened map.
+        let m = (self.rect.max - self.rect.min) * MARGIN_TEXELS as f32
+            / (n - 2.0 * MARGIN_TEXELS as f32);
+        let (lo, hi) = ((self.rect.min - m) * near, (self.rect.max + m) * near);
         Mat4::frustum_rh_gl(lo.x, hi.x, lo.y, hi.y, near, far)
     }
 
@@ -145,6 +146,7 @@ struct Mark {
     rect: Rect,
     /// Texels per plane unit it asks for.
     density: f32,
+    weight: f32,
 }
 
 /// Where `p` (eye space of a face view) falls on the face's image plane.
@@ -152,43 +154,58 @@ pub fn on_plane(p: Vec3) -> Vec2 {
     Vec2::new(p.x, p.y) / -p.z
 }
 
-/// Each face's marks: the part of each receiver's box inside the face's pyramid and beyond the
-/// near plane, as a rectangle, asking for its texels per unit times its mean distance (a world
-/// unit at distance d spans 1/d of the plane).
+/// Eye space looks down -z: inside a face, |x| and |y| are at most -z, and beyond the near plane.
+const FACE_PLANES: [Vec4; 5] = [
+    Vec4::new(-1.0, 0.0, -1.0, 0.0),
+    Vec4::new(1.0, 0.0, -1.0, 0.0),
+    Vec4::new(0.0, -1.0, -1.0, 0.0),
+    Vec4::new(0.0, 1.0, -1.0, 0.0),
+    Vec4::new(0.0, 0.0, -1.0, -MIN_NEAR),
+];
+
+/// What the part of `bounds` inside a face's pyramid (eye space `view`) and beyond the near
+/// plane covers of the face's image plane, and its mean distance along the face's axis; None
+/// where no part is. `points` is scratch space.
+fn footprint_in(view: &Mat4, bounds: &Aabb, points: &mut Vec<Vec3>) -> Option<(Rect, f32)> {
+    points.clear();
+    // A face view permutes the axes, so the box stays a box in eye space.
+    clip_box(&bounds.transformed(view), &FACE_PLANES, points);
+    if points.is_empty() {
+        return None;
+    }
+    let depth = points.iter().map(|p| -p.z).sum::<f32>() / points.len() as f32;
+    let mut rect = Rect {
+        min: Vec2::INFINITY,
+        max: Vec2::NEG_INFINITY,
+    };
+    for p in points.iter() {
+        let q = on_plane(*p).clamp(Rect::FACE.min, Rect::FACE.max);
+        rect.min = rect.min.min(q);
+        rect.max = rect.max.max(q);
+    }
+    Some((rect, depth))
+}
+
+/// What `bounds` covers of face `face` of an omni light at `light` (None: nothing beyond the
+/// near plane): whether a frustum's cell holds part of a receiver.
+pub fn footprint(light: Vec3, face: usize, bounds: &Aabb) -> Option<Rect> {
+    footprint_in(&cube_face_view(light, face), bounds, &mut Vec::new()).map(|(r, _)| r)
+}
+
+/// Each face's marks: each receiver's footprint, asking for its texels per unit times its mean
+/// distance (a world unit at distance d spans 1/d of the plane).
 fn marks(light: Vec3, needs: &[Need]) -> [Vec<Mark>; 6] {
-    // Eye space looks down -z: inside the face, |x| and |y| are at most -z.
-    let planes = [
-        Vec4::new(-1.0, 0.0, -1.0, 0.0),
-        Vec4::new(1.0, 0.0, -1.0, 0.0),
-        Vec4::new(0.0, -1.0, -1.0, 0.0),
-        Vec4::new(0.0, 1.0, -1.0, 0.0),
-        Vec4::new(0.0, 0.0, -1.0, -MIN_NEAR),
-    ];
     std::array::from_fn(|face| {
         let view = cube_face_view(light, face);
         let mut points = Vec::new();
         needs
             .iter()
             .filter_map(|n| {
-                points.clear();
-                // A face view permutes the axes, so the box stays a box in eye space.
-                clip_box(&n.bounds.transformed(&view), &planes, &mut points);
-                if points.is_empty() {
-                    return None;
-                }
-                let depth = points.iter().map(|p| -p.z).sum::<f32>() / points.len() as f32;
-                let mut rect = Rect {
-                    min: Vec2::INFINITY,
-                    max: Vec2::NEG_INFINITY,
-                };
-                for p in &points {
-                    let q = on_plane(*p).clamp(Rect::FACE.min, Rect::FACE.max);
-                    rect.min = rect.min.min(q);
-                    rect.max = rect.max.max(q);
-                }
+                let (rect, depth) = footprint_in(&view, &n.bounds, &mut points)?;
                 Some(Mark {
                     rect,
                     density: n.texels_per_unit.max(0.0) * depth,
+                    weight: n.weight.max(0.0),
                 })
             })
             .collect()
@@ -234,6 +251,22 @@ impl Node {
         (self.density as f64 * self.rect.side() as f64).powi(2)
     }
 
+    /// Its map's side relative to the others'. A receiver's wrong pixels along a shadow's edge
+    /// are about its size on screen (`weight`) times the screen pixels per map texel (its
+    /// density × the rectangle's side / the map's side): the node's error is `c / size` with
+    /// `c` = side × Σ weight × density. Sizes minimising Σ c / size at a fixed Σ size² go as
+    /// c^(1/3): a receiver asking for far more than the rest (one at the camera) gets more, but
+    /// does not starve them.
+    fn share(&self, marks: &[Mark]) -> f64 {
+        let c: f64 = self
+            .marks
+            .iter()
+            .map(|&i| marks[i].weight as f64 * marks[i].density as f64)
+            .sum::<f64>()
+            * self.rect.side() as f64;
+        c.cbrt()
+    }
+
     fn split(&self, marks: &[Mark]) -> Vec<Node> {
         self.quad
             .quadrants()
@@ -275,10 +308,7 @@ pub fn choose(light: Vec3, needs: &[Need], budget: &Budget) -> Vec<FaceFrustum> 
         nodes.extend(children);
     }
     nodes.sort_by_key(|n| n.face);
-    let raw: Vec<f64> = nodes
-        .iter()
-        .map(|n| n.density as f64 * n.rect.side() as f64)
-        .collect();
+    let raw: Vec<f64> = nodes.iter().map(|n| n.share(&marks[n.face])).collect();
     let sizes = fit_sizes(&raw, budget);
     nodes
         .iter()
@@ -286,7 +316,40 @@ pub fn choose(light: Vec3, needs: &[Need], budget: &Budget) -> Vec<FaceFrustum> 
         .map(|(n, size)| FaceFrustum {
             face: n.face,
             rect: n.rect,
+            cell: n.quad,
             size,
+        })
+        .collect()
+}
+
+/// The shadow views of `frusta` around an omni `light`: each its face's view and the
+/// off-centre projection over its rectangle, near and far fitted as for the whole face (thesis
+/// 2.2.2; `casters` are the casters' world bounds).
+pub fn frustum_views(
+    light: &Light,
+    frusta: &[FaceFrustum],
+    casters: &[Aabb],
+    fit: bool,
+) -> Vec<ShadowView> {
+    let mut fitted: [Option<(f32, f32)>; 6] = [None; 6];
+    frusta
+        .iter()
+        .map(|f| {
+            let view = f.view(light.position);
+            let (near, far) =
+                *fitted[f.face].get_or_insert_with(|| near_far(&view, light, casters, fit));
+            ShadowView {
+                kind: ViewKind::Face(f.face),
+                view,
+                projection: f.projection(near, far),
+                near,
+                far,
+                depth_view_proj: None,
+                part: Some(FacePart {
+                    size: f.size,
+                    cell: f.cell,
+                }),
+            }
         })
         .collect()
 }
@@ -358,6 +421,7 @@ mod tests {
         let need = Need {
             bounds: cube(Vec3::new(100.0, 10.0, -5.0), 5.0),
             texels_per_unit: 2.0,
+            weight: 20.0,
         };
         let f = choose(light, &[need], &budget(512));
         assert_eq!(f.len(), 1, "{f:?}");
@@ -368,6 +432,7 @@ mod tests {
         let whole = FaceFrustum {
             face: 0,
             rect: Rect::FACE,
+            cell: Rect::FACE,
             size: 512,
         };
         let (ours, face) = (f[0].texels_per_unit(100.0), whole.texels_per_unit(100.0));
@@ -391,6 +456,7 @@ mod tests {
                         max: c + h,
                     },
                     texels_per_unit: 1.0,
+                    weight: 100.0,
                 }
             })
             .collect();
@@ -417,6 +483,7 @@ mod tests {
                 4.0,
             ),
             texels_per_unit: 8.0,
+            weight: 64.0,
         }];
         // The light's surroundings, far from the camera: a floor under it, asking for little.
         needs.push(Need {
@@ -425,6 +492,7 @@ mod tests {
                 max: Vec3::new(150.0, 150.0, -38.0),
             },
             texels_per_unit: 0.25,
+            weight: 75.0,
         });
         let f = choose(light, &needs, &budget(512));
         assert!(texels(&f) <= budget(512).texels);
@@ -439,6 +507,7 @@ mod tests {
         let one_face = FaceFrustum {
             face,
             rect: Rect::FACE,
+            cell: Rect::FACE,
             size: 512,
         };
         let (ours, faces) = (own.texels_per_unit(200.0), one_face.texels_per_unit(200.0));
@@ -466,6 +535,7 @@ mod tests {
                             max: c + h,
                         },
                         texels_per_unit: 0.1 + rng.f32().powi(3) * 20.0,
+                        weight: rng.f32() * 200.0,
                     }
                 })
                 .collect();
@@ -512,21 +582,120 @@ mod tests {
         assert!(split > 50, "faces split in only {split} of 200 scenes");
     }
 
+    /// A floor passing under the camera asks for many texels where it is near and few far off.
     #[test]
-    fn the_projection_maps_the_rectangle_to_the_whole_map() {
+    fn a_long_floor_asks_for_more_near_the_camera() {
+        let eye = Eye {
+            position: Vec3::new(0.0, 0.0, 50.0),
+            pixels: 400.0,
+            near: 4.0,
+            screen: 640.0,
+        };
+        let floor = Aabb {
+            min: Vec3::new(-2000.0, -100.0, 0.0),
+            max: Vec3::new(2000.0, 100.0, 0.0),
+        };
+        let mut needs = Vec::new();
+        receiver_needs(floor, &eye, &mut needs);
+        // Halved where longer than its distance: 8 pieces, the far ones left whole.
+        assert!(
+            needs.len() > 4 && needs.len() <= 1 << NEED_SPLITS,
+            "{needs:?}"
+        );
+        let near = needs
+            .iter()
+            .find(|n| n.bounds.min.x <= 0.0 && n.bounds.max.x >= 0.0);
+        let far = needs.iter().find(|n| n.bounds.min.x == -2000.0);
+        let (near, far) = (near.unwrap(), far.unwrap());
+        // 50 units below the eye against 1000 units away.
+        assert!((near.texels_per_unit - 8.0).abs() < 1e-3, "{near:?}");
+        assert!(far.texels_per_unit < 0.41, "{far:?}");
+        assert!(needs.iter().all(|n| n.weight <= 640.0));
+    }
+
+    /// One receiver at the camera asking for 1000 times what the rest ask for takes the largest
+    /// map, but the others keep maps above twice the smallest (sizes in proportion to what
+    /// each asks for would leave them about a twentieth of its side).
+    #[test]
+    fn a_receiver_at_the_camera_does_not_starve_the_others() {
+        let light = Vec3::ZERO;
+        let mut needs: Vec<Need> = (0..6)
+            .map(|f| {
+                let axis = crate::plan::cull::face_axes(f).0;
+                let c = axis * 50.0;
+                let h = Vec3::splat(60.0) - axis.abs() * 59.0;
+                Need {
+                    bounds: Aabb {
+                        min: c - h,
+                        max: c + h,
+                    },
+                    texels_per_unit: 1.0,
+                    weight: 100.0,
+                }
+            })
+            .collect();
+        needs.push(Need {
+            bounds: cube(Vec3::new(40.0, 5.0, 5.0), 1.0),
+            texels_per_unit: 1000.0,
+            weight: 640.0,
+        });
+        let f = choose(light, &needs, &budget(256));
+        let smallest = f.iter().map(|f| f.size).min().unwrap();
+        let own = f
+            .iter()
+            .find(|f| f.face == 0 && f.cell.contains(Vec2::new(-0.125, -0.125)))
+            .unwrap();
+        assert!(f.iter().all(|g| g.size <= own.size), "{f:?}");
+        assert!(smallest > 2 * budget(256).min_size, "{f:?}");
+    }
+
+    /// A face's cells never overlap and each frustum's rectangle lies in its cell: a fragment
+    /// has one frustum, and that frustum's map holds it.
+    #[test]
+    fn cells_partition_and_hold_their_rectangles() {
+        let mut rng = fastrand::Rng::with_seed(11);
+        for _ in 0..100 {
+            let needs: Vec<Need> = (0..rng.usize(1..30))
+                .map(|_| {
+                    let c = (Vec3::new(rng.f32(), rng.f32(), rng.f32()) - 0.5) * 300.0;
+                    Need {
+                        bounds: cube(c, 1.0 + rng.f32() * 20.0),
+                        texels_per_unit: 0.1 + rng.f32().powi(3) * 20.0,
+                        weight: 1.0 + rng.f32() * 300.0,
+                    }
+                })
+                .collect();
+            let f = choose(Vec3::ZERO, &needs, &budget(256));
+            for (i, a) in f.iter().enumerate() {
+                assert!(
+                    a.rect.min.cmpge(a.cell.min).all() && a.rect.max.cmple(a.cell.max).all(),
+                    "{a:?}"
+                );
+                for c in &f[i + 1..] {
+                    assert!(a.face != c.face || !a.cell.overlaps(&c.cell), "{a:?} {c:?}");
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn the_projection_maps_the_rectangle_to_the_map_within_its_margin() {
         let f = FaceFrustum {
             face: 2,
             rect: Rect {
                 min: Vec2::new(-0.5, 0.1),
                 max: Vec2::new(0.25, 0.9),
             },
+            cell: Rect::FACE,
             size: 64,
         };
         let (near, far) = (2.0, 300.0);
         let m = f.projection(near, far);
+        // The rectangle ends MARGIN_TEXELS texels inside the map's edges.
+        let inner = 1.0 - 2.0 * MARGIN_TEXELS as f32 / 64.0;
         for (corner, want) in [
-            (Vec2::new(-0.5, 0.1), Vec2::new(-1.0, -1.0)),
-            (Vec2::new(0.25, 0.9), Vec2::new(1.0, 1.0)),
+            (Vec2::new(-0.5, 0.1), Vec2::splat(-inner)),
+            (Vec2::new(0.25, 0.9), Vec2::splat(inner)),
         ] {
             let eye = (corner * 50.0).extend(-50.0);
             let clip = m.project_point3(eye);

@@ -7,7 +7,7 @@ use crate::geometry::projection::{
 };
 use crate::options::{OmniMode, ShadowMapOptions};
 use crate::scene::{Light, LightKind};
-use glam::{Mat4, Vec3, Vec4};
+use glam::{Mat4, Vec2, Vec3, Vec4};
 
 /// Smallest near plane a fitted frustum gets, in world units.
 pub const MIN_NEAR: f32 = 1.0;
@@ -26,6 +26,82 @@ pub enum ViewKind {
     Cube,
 }
 
+/// A rectangle of a face's image plane.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Rect {
+    pub min: Vec2,
+    pub max: Vec2,
+}
+
+impl Rect {
+    /// The whole face.
+    pub const FACE: Rect = Rect {
+        min: Vec2::NEG_ONE,
+        max: Vec2::ONE,
+    };
+
+    pub fn union(&self, o: &Rect) -> Rect {
+        Rect {
+            min: self.min.min(o.min),
+            max: self.max.max(o.max),
+        }
+    }
+
+    /// The common part, edges included (a receiver seen edge-on is a line and still counts).
+    pub fn intersection(&self, o: &Rect) -> Option<Rect> {
+        let (min, max) = (self.min.max(o.min), self.max.min(o.max));
+        (min.x <= max.x && min.y <= max.y).then_some(Rect { min, max })
+    }
+
+    /// The longer side: a square map over the rectangle has `size / side` texels per plane unit
+    /// in its coarser direction.
+    pub fn side(&self) -> f32 {
+        (self.max - self.min).max_element()
+    }
+
+    pub fn contains(&self, p: Vec2) -> bool {
+        p.cmpge(self.min).all() && p.cmple(self.max).all()
+    }
+
+    /// Whether the two share more than an edge.
+    pub fn overlaps(&self, o: &Rect) -> bool {
+        let (min, max) = (self.min.max(o.min), self.max.min(o.max));
+        min.x < max.x && min.y < max.y
+    }
+
+    /// The four quarters, split at the centre (a quadtree's children).
+    pub fn quadrants(&self) -> [Rect; 4] {
+        let c = (self.min + self.max) * 0.5;
+        [
+            Rect {
+                min: self.min,
+                max: c,
+            },
+            Rect {
+                min: Vec2::new(c.x, self.min.y),
+                max: Vec2::new(self.max.x, c.y),
+            },
+            Rect {
+                min: Vec2::new(self.min.x, c.y),
+                max: Vec2::new(c.x, self.max.y),
+            },
+            Rect {
+                min: c,
+                max: self.max,
+            },
+        ]
+    }
+}
+
+/// Where one of several frusta of an omni light lies (`shadow_map.omni = frusta`,
+/// [`crate::shadow::frusta`]): its map's own size and the cell of its face's image plane whose
+/// fragments it lights (a face's cells never overlap, so each fragment has one frustum).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct FacePart {
+    pub size: u32,
+    pub cell: Rect,
+}
+
 /// One shadow map's camera.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct ShadowView {
@@ -40,11 +116,19 @@ pub struct ShadowView {
     /// trapezoid's projective map would scale each ray's depth by its own factor and make
     /// the map's depth slope, and so the slope-scaled offset, huge).
     pub depth_view_proj: Option<Mat4>,
+    /// One of several frusta over part of face `Face(f)`; None: a whole view of
+    /// `shadow_map.size`.
+    pub part: Option<FacePart>,
 }
 
 impl ShadowView {
     pub fn view_proj(&self) -> Mat4 {
         self.projection * self.view
+    }
+
+    /// The side of this view's map: its own under multiple frusta, `shadow_map.size` else.
+    pub fn map_size(&self, size: u32) -> u32 {
+        self.part.map_or(size, |p| p.size)
     }
 
     /// The paper's eye-linear texgen planes: T = B · P_light · V_light · V_camera⁻¹, taking camera
@@ -111,7 +195,7 @@ pub fn major_face(d: Vec3) -> usize {
 
 /// Near and far for a view: fitted to the boxes of casters within the light's radius
 /// (thesis 2.2.2), or near 1 and far = radius when fitting is off.
-fn near_far(view: &Mat4, light: &Light, casters: &[Aabb], fit: bool) -> (f32, f32) {
+pub(crate) fn near_far(view: &Mat4, light: &Light, casters: &[Aabb], fit: bool) -> (f32, f32) {
     if !fit {
         return (MIN_NEAR, light.radius.max(MIN_NEAR * 2.0));
     }
@@ -164,6 +248,7 @@ pub fn shadow_views(
                 near,
                 far,
                 depth_view_proj: None,
+                part: None,
             }]
         }
         LightKind::Omni => {
@@ -179,6 +264,7 @@ pub fn shadow_views(
                         near,
                         far,
                         depth_view_proj: None,
+                        part: None,
                     }
                 })
                 .collect();
@@ -198,6 +284,7 @@ pub fn shadow_views(
                         near,
                         far,
                         depth_view_proj: None,
+                        part: None,
                     }]
                 }
             }

@@ -213,8 +213,9 @@ impl App {
                     (
                         i,
                         format!(
-                            "light {light}'s shadow map, view {} (brighter: nearer)",
-                            state.face
+                            "light {light}'s shadow map, view {} ({depth_images} views; \
+                             brighter: nearer)",
+                            state.face.min(depth_images.saturating_sub(1))
                         ),
                     )
                 })

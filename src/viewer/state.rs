@@ -471,7 +471,9 @@ impl ViewerState {
                     self.selected_light = i;
                 }
                 Command::View(v) => self.view = v,
-                Command::Face(f) => self.face = f.min(5),
+                // Up to six faces, or as many frusta as `shadow_map.max_frusta` allows; the view
+                // shows the last a light has when asked for more.
+                Command::Face(f) => self.face = f.min(63),
                 Command::Overlay(t, on) => self.toggle(t, on),
                 Command::Walkthrough(k) => {
                     self.walkthrough = k.map(|k| k.min(self.steps.len().saturating_sub(1)))

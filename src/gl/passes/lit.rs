@@ -143,7 +143,7 @@ fn bind_maps(ctx: &PassContext, program: &Program, lp: &LightPlan, shadow: &LitS
     program.set_mat4(gl, "u_view", &space.to_texgen_space);
     program.set_mat4(gl, "u_texgen", &texgen);
     program.set_mat4(gl, "u_texgen_depth", &depth);
-    program.set_f32(gl, "u_map_size", o.size as f32);
+    program.set_f32(gl, "u_map_size", s.view.map_size(o.size) as f32);
     program.set_i32(gl, "u_pcf_size", o.pcf_size as i32);
     program.set_i32(gl, "u_sm_alpha_func", o.alpha_func as i32);
     program.set_f32(gl, "u_sm_alpha_ref", o.alpha_ref);
@@ -152,6 +152,15 @@ fn bind_maps(ctx: &PassContext, program: &Program, lp: &LightPlan, shadow: &LitS
         _ => -1,
     };
     program.set_i32(gl, "u_face", face);
+    // One of several frusta lights its cell of the face; min > max: the whole face.
+    let cell = s
+        .view
+        .part
+        .map_or(glam::Vec4::new(1.0, 1.0, -1.0, -1.0), |p| {
+            p.cell.min.extend(p.cell.max.x).extend(p.cell.max.y)
+        });
+    program.set_vec4(gl, "u_cell", cell);
+    program.set_mat3(gl, "u_face_rot", &glam::Mat3::from_mat4(s.view.view));
     program.set_vec2(
         gl,
         "u_cube_near_far",
