@@ -119,6 +119,15 @@ uniform int u_mask_value;
 out vec4 o_color;
 
 void main() {
+#ifdef PRIORITY_MIPMAP
+    // The footprint of the pixel on the map, while every fragment of the quad is still here.
+    {
+        vec4 c = shadow_coords();
+        vec2 uv = c.xy / c.w;
+        g_map_dx = dFdx(uv);
+        g_map_dy = dFdy(uv);
+    }
+#endif
 #ifdef SHADOW_MAP
     // One of an omni light's six spots: fragments of the other faces leave before any work.
     // One of several frusta: fragments of the other cells leave too.

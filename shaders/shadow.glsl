@@ -30,16 +30,39 @@ int g_face = 0;
 #define MAP_PICK(E0, E1, E2, E3, E4, E5) (g_face == 0 ? E0 : g_face == 1 ? E1 : g_face == 2 ? E2 : g_face == 3 ? E3 : g_face == 4 ? E4 : E5)
 #define MAP_CALL1(F, A) MAP_PICK(F(u_face_maps[0], A), F(u_face_maps[1], A), F(u_face_maps[2], A), F(u_face_maps[3], A), F(u_face_maps[4], A), F(u_face_maps[5], A))
 #define MAP_CALL2(F, A, B) MAP_PICK(F(u_face_maps[0], A, B), F(u_face_maps[1], A, B), F(u_face_maps[2], A, B), F(u_face_maps[3], A, B), F(u_face_maps[4], A, B), F(u_face_maps[5], A, B))
+#define MAP_CALL3(F, A, B, C) MAP_PICK(F(u_face_maps[0], A, B, C), F(u_face_maps[1], A, B, C), F(u_face_maps[2], A, B, C), F(u_face_maps[3], A, B, C), F(u_face_maps[4], A, B, C), F(u_face_maps[5], A, B, C))
 #else
 uniform MAP_SAMPLER u_shadow_map;
 #define MAP_CALL1(F, A) F(u_shadow_map, A)
 #define MAP_CALL2(F, A, B) F(u_shadow_map, A, B)
+#define MAP_CALL3(F, A, B, C) F(u_shadow_map, A, B, C)
+#endif
+#ifdef PRIORITY_MIPMAP
+// A priority buffer's mip chain: the level is chosen from the map coordinates' derivatives,
+// taken at the top of lit.frag's main (lookups sit in branches, where implicit ones are
+// undefined).
+vec2 g_map_dx = vec2(0.0);
+vec2 g_map_dy = vec2(0.0);
+// The level one step finer than the texel with the pixel's footprint's area. The area, not the
+// longer side (GL's own choice): a receiver seen at a grazing angle would read a level far
+// coarser than it covers. One step finer: a level's texels are aligned to the map's grid, not
+// to the pixel, and a texel of the footprint's size misplaces an edge by up to a texel
+// (measured: docs/id-buffers.md).
+float map_lod() {
+    vec2 a = g_map_dx * u_map_size;
+    vec2 b = g_map_dy * u_map_size;
+    float area = abs(a.x * b.y - a.y * b.x);
+    return max(0.5 * log2(max(area, 1e-12)) - 1.0, 0.0);
+}
+#define MAP_LOOKUP(A) MAP_CALL2(textureLod, A, map_lod())
+#else
+#define MAP_LOOKUP(A) MAP_CALL1(texture, A)
 #endif
 #if defined(COMPARE_SHADER) || defined(BUFFER_ID)
-float map_depth(vec2 uv) { return MAP_CALL1(texture, uv).r; }
+float map_depth(vec2 uv) { return MAP_LOOKUP(uv).r; }
 float map_texel(ivec2 t) { return MAP_CALL2(texelFetch, t, 0).r; }
 #else
-float map_compare(vec3 c) { return MAP_CALL1(texture, c); }
+float map_compare(vec3 c) { return MAP_LOOKUP(c); }
 #endif
 #ifdef BUFFER_ID
 // ID buffers: the fragment's own ID (lit.frag sets it from the table) against the IDs stored.

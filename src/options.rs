@@ -979,6 +979,11 @@ define_options! {
         /// ID buffers: lit where the fragment's ID is stored at its texel or at any of the
         /// eight around it (Forsyth's cure for edge acne; shrinks shadows by about a texel).
         id_edge_filter: bool = false;
+        /// Priority buffers (`buffer = priority`): a mip chain, each texel the upper median of
+        /// the four below it, read at the level of the fragment's footprint, so that a map
+        /// finer than the screen decides by about half the texels a pixel covers, not by one
+        /// (Forsyth: priorities "can be filtered and mipmapped"; docs/id-buffers.md).
+        priority_mipmap: bool = false;
         /// Hybrid priority and depth: the bias, as a share of each unit's own depth range.
         priority_bias: f32 = 0.02, in 0.0 ..= 1.0;
         /// Where the texgen planes apply: eye coordinates as glTexGen does (the paper), or

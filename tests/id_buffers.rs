@@ -126,3 +126,77 @@ fn eight_bit_triangle_ids_collide() {
     let n = report("oa_dm1", "triangle ids, 8 bits", &narrow);
     assert!(n.false_lit > f.false_lit, "8 bits lose no shadow: {n:?}");
 }
+
+/// Priority buffers under minification (`shadow_map.priority_mipmap`): a 2048² map seen in a
+/// 160×120 frame, so that a pixel covers many texels. The reference is what most of each
+/// pixel's area sees (the exact masks at 640×480, by majority over 4×4 blocks): one texel at
+/// the pixel's centre says only what the centre sees. The chain must change nothing where the
+/// map is magnified and must be read where it is minified; whether it errs less than the
+/// unfiltered buffer is measured and printed (docs/id-buffers.md: it does not, here).
+#[test]
+fn mipmapped_priority_buffers_under_minification() {
+    let priority = |size: &'static str, w: &'static str, h: &'static str, mipmap: bool| {
+        let mut sets = vec![SM, "shadow_map.buffer=priority", size, w, h];
+        sets.push(if mipmap {
+            "shadow_map.priority_mipmap=true"
+        } else {
+            "shadow_map.priority_mipmap=false"
+        });
+        options_with(&sets)
+    };
+    // Magnified (a 256² map over 640×480): level 0 everywhere, the same decisions.
+    let mut m = Measurer::new(
+        load_asset("assets/hard/thin_casters.toml").0,
+        &options_with(&[SM]),
+    );
+    let (size, w, h) = ("shadow_map.size=256", "width=640", "height=480");
+    let flat = m.measure(&priority(size, w, h, false));
+    let chain = m.measure(&priority(size, w, h, true));
+    assert_eq!(differing(flat.mask(0), chain.mask(0)), 0);
+
+    let mut changed = 0;
+    for (case, file) in [
+        ("thin_casters", "assets/hard/thin_casters.toml"),
+        ("grazing", "assets/hard/grazing.toml"),
+        ("builtin", ""),
+    ] {
+        let scene = if file.is_empty() {
+            shadowlab::scene::builtin::default_scene()
+        } else {
+            load_asset(file).0
+        };
+        let lights = scene.lights.len();
+        let mut m = Measurer::new(scene, &options_with(&[SM]));
+        // The exact masks at four times the frame's size (the G-buffer comes with any frame).
+        m.measure(&options_with(&[SM, "width=640", "height=480"]));
+        let fine: Vec<shadowlab::images::Mask> =
+            (0..lights).map(|l| m.exact(640, 480, l).clone()).collect();
+        let (size, w, h) = ("shadow_map.size=2048", "width=160", "height=120");
+        let runs = [false, true].map(|mipmap| m.measure(&priority(size, w, h, mipmap)));
+        let errors = runs.each_ref().map(|r| {
+            let mut all = Counts::default();
+            for (l, f) in fine.iter().enumerate() {
+                let (reference, decided) = shadowlab::truth::majority(f, 4);
+                let c = shadowlab::truth::compare_where(r.mask(l), &reference, |i| decided[i]);
+                all.receiver_pixels += c.receiver_pixels;
+                all.false_shadow += c.false_shadow;
+                all.false_lit += c.false_lit;
+            }
+            all.rates().total
+        });
+        println!(
+            "{case}, priority 2048 at 160x120 against the majority: unfiltered {}, mipmapped {} \
+             (against the pixel centres: {}, {})",
+            pct(errors[0]),
+            pct(errors[1]),
+            pct(runs[0].total.rates().total),
+            pct(runs[1].total.rates().total),
+        );
+        changed += (0..lights)
+            .map(|l| differing(runs[0].mask(l), runs[1].mask(l)))
+            .sum::<usize>();
+    }
+    // The chain is read: some pixel decides otherwise (on the grazing case no level above 0
+    // changes a decision: its shadow edges are long straight lines).
+    assert!(changed > 0, "the mip chain changed no pixel");
+}

@@ -41,6 +41,7 @@ fn quick_report_measures_every_section_and_writes_it() {
         "forsyth-buffers",
         "forsyth-ids",
         "forsyth-shootout",
+        "forsyth-frusta",
         "vector-subdivision",
     ] {
         let s = report
@@ -101,6 +102,12 @@ fn quick_report_measures_every_section_and_writes_it() {
     println!("forsyth buffers: {:?}", fb.numbers);
     assert!(fb.number("depth_no_offset") > 0.3);
     assert!(fb.number("id") < fb.number("depth_no_offset") / 100.0);
+    // Forsyth: multiple frusta beat six faces of the same texels where the camera faces the
+    // light (tests/frusta.rs measures it at 640x480; here at the quick report's size).
+    let ff = report.section("forsyth-frusta").unwrap();
+    println!("forsyth frusta: {:?}", ff.numbers);
+    assert!(ff.number("frusta_256") < ff.number("faces_256"));
+    assert!(ff.number("frusta_512") < ff.number("faces_512"));
     // Vector: the two exact references agree outside the boundary band (tests/subdivision.rs
     // says which pixels may differ and why).
     let v = report.section("vector-subdivision").unwrap();

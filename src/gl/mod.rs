@@ -12,6 +12,7 @@ pub mod id_tables;
 pub mod legacy;
 pub mod osmesa;
 pub mod passes;
+pub mod priority_mips;
 pub mod program;
 pub mod renderer;
 pub mod shadow_maps;

@@ -43,6 +43,7 @@ pub mod sources {
     pub const FULLSCREEN_VERT: &str = include_str!("../../shaders/fullscreen.vert");
     pub const FILL_FRAG: &str = include_str!("../../shaders/fill.frag");
     pub const DEPTH_REDUCE_FRAG: &str = include_str!("../../shaders/depth_reduce.frag");
+    pub const PRIORITY_MIPS_FRAG: &str = include_str!("../../shaders/priority_mips.frag");
     pub const DEBUG_VOLUME_VERT: &str = include_str!("../../shaders/debug_volume.vert");
     pub const DEBUG_VOLUME_FRAG: &str = include_str!("../../shaders/debug_volume.frag");
 }

@@ -16,6 +16,7 @@ use super::legacy::Legacy;
 use super::passes::lit::{LitShadow, ShadowBinding};
 use super::passes::shadow_map::{DepthTarget, copies_from_frame, copy_depth};
 use super::passes::{self, PassContext, set_scissor};
+use super::priority_mips;
 use super::program::{Program, ProgramError, sources};
 use super::shadow_maps::{MapKey, ShadowMaps};
 use super::target::{Framebuffer, GBufferTarget, MaskTarget};
@@ -138,6 +139,9 @@ fn lit_defines(options: &Options, v: LitVariant, texel_grid: bool) -> Vec<&'stat
     let mut d = Vec::new();
     if shadow_map {
         d.extend(buffer_defines(buffer, options.shadow_map.id_edge_filter));
+        if buffer == MapBuffer::Priority && options.shadow_map.priority_mipmap && !cube {
+            d.push("PRIORITY_MIPMAP");
+        }
     }
     if hybrid {
         d.push("HYBRID");
@@ -242,6 +246,8 @@ struct Programs {
     fill: Program,
     /// The depth's 4×4 block maxima for the planner.
     depth_reduce: Program,
+    /// A priority buffer's mip levels (`shadow_map.priority_mipmap`).
+    priority_mips: Program,
     /// Volumes and silhouettes drawn over the frame (debug overlay).
     debug_volume: Program,
     /// Lit programs by their define set, compiled on first use.
@@ -298,6 +304,13 @@ impl Programs {
                 "depth_reduce",
                 sources::FULLSCREEN_VERT,
                 Some(sources::DEPTH_REDUCE_FRAG),
+                &[],
+            )?,
+            priority_mips: Program::new(
+                gl,
+                "priority_mips",
+                sources::FULLSCREEN_VERT,
+                Some(sources::PRIORITY_MIPS_FRAG),
                 &[],
             )?,
             debug_volume: Program::new(
@@ -363,6 +376,7 @@ impl Programs {
             &self.volume.extruded,
             &self.fill,
             &self.depth_reduce,
+            &self.priority_mips,
             &self.debug_volume,
         ] {
             p.delete(gl);
@@ -1033,6 +1047,8 @@ impl<'a> FrameRun<'a> {
                     lp.light,
                 )
                 .map_err(RenderError::Gl)?;
+            // A priority buffer's mip chain (never a cube: priority maps are six spots).
+            let mipmapped = buffer == MapBuffer::Priority && sm.priority_mipmap;
             for (vi, view) in lp.views.iter().enumerate() {
                 let cube = view.kind == ViewKind::Cube;
                 let size = view.map_size(sm.size);
@@ -1041,6 +1057,11 @@ impl<'a> FrameRun<'a> {
                     size,
                     bits: sm.depth_bits,
                     buffer,
+                    levels: if mipmapped && !cube {
+                        priority_mips::levels(size)
+                    } else {
+                        1
+                    },
                 };
                 if !kinds.contains(&kind) {
                     kinds.push(kind);
@@ -1080,6 +1101,7 @@ impl<'a> FrameRun<'a> {
                         vec![(None, view.view_proj())]
                     }
                 };
+                let drawn = !faces.is_empty();
                 for (face, view_proj) in faces {
                     let buffers = MapBuffers {
                         depth: texture,
@@ -1089,9 +1111,25 @@ impl<'a> FrameRun<'a> {
                     };
                     go_on!(self.map_face(lp, vi, (face, view_proj), fbo, buffers));
                 }
+                if drawn && kind.levels > 1 {
+                    let mip_fbo = self.shadow_maps.fbo(gl).map_err(RenderError::Gl)?;
+                    priority_mips::build(
+                        gl,
+                        &self.programs.priority_mips,
+                        self.empty_vao,
+                        mip_fbo,
+                        (texture, size, kind.levels),
+                    );
+                }
                 self.shadow_maps.set_content(lp.light, vi, key);
                 if ids.is_none() {
-                    ShadowMaps::configure(gl, texture, cube, sm.compare, sm.filter);
+                    ShadowMaps::configure(
+                        gl,
+                        texture,
+                        (cube, kind.levels > 1),
+                        sm.compare,
+                        sm.filter,
+                    );
                 }
                 self.last_maps.push(LastMap {
                     light: lp.light,

@@ -13,6 +13,8 @@ pub struct MapKey {
     pub size: u32,
     pub bits: DepthBits,
     pub buffer: MapBuffer,
+    /// Mip levels (1: none; a priority buffer's chain, `shadow_map.priority_mipmap`).
+    pub levels: u32,
 }
 
 struct Slot {
@@ -67,18 +69,26 @@ fn allocate(gl: &glow::Context, key: MapKey) -> Result<glow::Texture, String> {
             vec![glow::TEXTURE_2D]
         };
         for face in faces {
-            gl.tex_image_2d(
-                face,
-                0,
-                internal as i32,
-                key.size as i32,
-                key.size as i32,
-                0,
-                format,
-                ty,
-                glow::PixelUnpackData::Slice(None),
-            );
+            for level in 0..key.levels.max(1) {
+                let side = super::priority_mips::level_size(key.size, level) as i32;
+                gl.tex_image_2d(
+                    face,
+                    level as i32,
+                    internal as i32,
+                    side,
+                    side,
+                    0,
+                    format,
+                    ty,
+                    glow::PixelUnpackData::Slice(None),
+                );
+            }
         }
+        gl.tex_parameter_i32(
+            target,
+            glow::TEXTURE_MAX_LEVEL,
+            key.levels.saturating_sub(1) as i32,
+        );
         // GL_CLAMP in the paper: outside [0,1] the edge texels are read.
         gl.tex_parameter_i32(target, glow::TEXTURE_WRAP_S, glow::CLAMP_TO_EDGE as i32);
         gl.tex_parameter_i32(target, glow::TEXTURE_WRAP_T, glow::CLAMP_TO_EDGE as i32);
@@ -213,11 +223,12 @@ impl ShadowMaps {
         }
     }
 
-    /// Sampling state for the lit pass: compare mode (ARB_shadow) and filtering.
+    /// Sampling state for the lit pass: compare mode (ARB_shadow) and filtering (between
+    /// texels, and from the nearest level when `mipmapped`).
     pub fn configure(
         gl: &glow::Context,
         texture: glow::Texture,
-        cube: bool,
+        (cube, mipmapped): (bool, bool),
         compare: Compare,
         filter: Filter,
     ) {
@@ -228,10 +239,16 @@ impl ShadowMaps {
         };
         let linear = filter == Filter::Hw2x2 && compare == Compare::Hardware;
         let f = if linear { glow::LINEAR } else { glow::NEAREST } as i32;
+        // From the nearest level: blending two levels' compares measured worse (docs/id-buffers.md).
+        let min = match (mipmapped, linear) {
+            (false, _) => f,
+            (true, false) => glow::NEAREST_MIPMAP_NEAREST as i32,
+            (true, true) => glow::LINEAR_MIPMAP_NEAREST as i32,
+        };
         // SAFETY: parameters of our texture.
         unsafe {
             gl.bind_texture(target, Some(texture));
-            gl.tex_parameter_i32(target, glow::TEXTURE_MIN_FILTER, f);
+            gl.tex_parameter_i32(target, glow::TEXTURE_MIN_FILTER, min);
             gl.tex_parameter_i32(target, glow::TEXTURE_MAG_FILTER, f);
             let mode = match compare {
                 Compare::Hardware => glow::COMPARE_REF_TO_TEXTURE,

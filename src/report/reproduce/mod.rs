@@ -325,6 +325,25 @@ pub fn run(
         bar.inc(1);
     }
     {
+        // Multiple frusta where the camera faces an omni light.
+        let name = "../hard/duelling_omni";
+        let (scene, options, _) = load_scene(settings, name)?;
+        renderer.load_scene(&scene)?;
+        let mut lab = Lab::new(
+            renderer,
+            &scene,
+            "duelling_omni",
+            options,
+            settings,
+            out,
+            &bar,
+        )
+        .with_scene_file("assets/hard/duelling_omni.toml");
+        sections.push(forsyth::frusta(&mut lab)?);
+        report.rows.extend(lab.into_rows());
+        bar.inc(1);
+    }
+    {
         // Perspective shadow maps on the hard case made for them.
         let name = "../hard/near_receiver";
         let (scene, options, _) = load_scene(settings, name)?;
