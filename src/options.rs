@@ -839,6 +839,11 @@ define_options! {
         one_pass_stencil: bool = true;
         /// Reuse a shadow map while its light, view and casters stay as they were.
         cache_maps: bool = true;
+        /// `shadow_map.omni = frusta`: a static omni light keeps its frusta (and so its maps)
+        /// while the receivers in view stay within them, choosing again one frame in 16 at a
+        /// phase of its own (Forsyth's persistent frusta); off: chosen every frame. Changes
+        /// pixels: kept frusta are sized for an earlier frame's view.
+        keep_frusta: bool = true;
         /// Light an omni light's six spot maps in one pass, each fragment reading its face's
         /// map (the paper draws six passes; not with `shadow_map.outside = clip_planes`).
         merge_faces: bool = true;

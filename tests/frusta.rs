@@ -172,3 +172,52 @@ fn frusta_handle_duelling_frusta() {
         );
     }
 }
+
+/// Forsyth's persistent frusta (`plan.keep_frusta`): while the camera sidesteps slowly, a static
+/// light keeps the frusta it chose (its maps are then reused), choosing again one frame in 16,
+/// and errs about as it does choosing every frame.
+#[test]
+fn a_static_light_keeps_its_frusta_and_maps_while_the_camera_moves() {
+    let (scene, _, _) = load_asset("assets/hard/duelling_omni.toml");
+    let base = scene.camera;
+    let mut m = Measurer::new(scene, &Options::default());
+    const FRAMES: usize = 24;
+    let mut run = |keep: &str| {
+        let o = options_with(&["technique=shadow_map", "shadow_map.omni=frusta", keep]);
+        let (mut kept, mut reused, mut error) = (0, 0, 0.0);
+        for i in 0..FRAMES {
+            let mut c = base;
+            c.position.x += i as f32 * 0.5;
+            m.set_camera(c);
+            let r = m.measure(&o);
+            let stats = &r.frame.plan_stats.frusta;
+            kept += stats.iter().filter(|l| l.contains("(kept)")).count();
+            reused += r.frame.cache.maps_reused;
+            error += omni_error(&m.scene, &r) / FRAMES as f64;
+        }
+        (kept, reused, error)
+    };
+    let (kept, reused, error) = run("plan.keep_frusta=true");
+    let (kept_off, reused_off, error_off) = run("plan.keep_frusta=false");
+    println!(
+        "kept on {kept} of {FRAMES} frames, {reused} maps reused, error {}; choosing every \
+         frame: {kept_off}, {reused_off}, {}",
+        pct(error),
+        pct(error_off)
+    );
+    assert_eq!(kept_off, 0);
+    // The first frame chooses, and one in 16 chooses again; a receiver leaving the frusta
+    // would make another.
+    assert!(kept >= FRAMES - 4, "kept on {kept} of {FRAMES} frames");
+    assert!(
+        reused > reused_off,
+        "{reused} maps reused against {reused_off}"
+    );
+    // Half a unit a frame over 12 units: the kept frusta still fit the receivers in view.
+    assert!(
+        error <= error_off * 1.25 + 1e-4,
+        "kept {} against {}",
+        pct(error),
+        pct(error_off)
+    );
+}

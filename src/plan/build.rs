@@ -2,6 +2,7 @@
 //! receivers, then each enabled light: culled, or given a technique and its shadow work.
 
 use super::auto::{self, AutoMemory};
+use super::kept_frusta::KeptFrusta;
 use super::scissor::{self, Scissor};
 use super::{CameraSetup, LightPlan, PartTriangles, Plan, PlanStats, VolumePart, cull};
 use crate::geometry::{Aabb, Frustum};
@@ -16,6 +17,9 @@ use crate::shadow::volume::{self, CasterGroup, CasterGroups, Counting, PieceRef}
 use crate::shadow::warp::{self, WarpInput};
 use glam::{Mat4, Vec3};
 
+/// How far (in the face's image plane) a receiver may reach past a kept frustum's rectangle:
+/// within the one-texel margin of any map of up to 2048 texels (`plan.keep_frusta`).
+const KEEP_SLACK: f32 = 1.0 / 2048.0;
 /// The smallest map one of several frusta gets (`shadow_map.omni = frusta`).
 const MIN_FRUSTUM_SIZE: u32 = 32;
 /// The largest, unless `shadow_map.size` is larger: at most four times its side (GL 3.3
@@ -28,6 +32,7 @@ fn frusta_line(
     light: usize,
     views: &[crate::shadow::views::ShadowView],
     o: &ShadowMapOptions,
+    kept: bool,
 ) -> String {
     let texels: u64 = views
         .iter()
@@ -41,8 +46,9 @@ fn frusta_line(
         })
         .collect();
     format!(
-        "light {light}: {} frusta, {texels} texels (six faces: {}): {}",
+        "light {light}: {} frusta{}, {texels} texels (six faces: {}): {}",
         views.len(),
+        if kept { " (kept)" } else { "" },
         6 * u64::from(o.size).pow(2),
         each.join(" ")
     )
@@ -69,6 +75,8 @@ struct FrameFacts<'a> {
     scene: &'a Scene,
     options: &'a Options,
     memory: &'a AutoMemory,
+    /// Frusta chosen in earlier frames (`plan.keep_frusta`).
+    kept: &'a KeptFrusta,
     camera: CameraSetup,
     /// The scene's camera (warped maps fit to it).
     scene_camera: Camera,
@@ -99,7 +107,7 @@ impl Plan {
         scene: &Scene,
         camera: &Camera,
         options: &Options,
-        memory: &AutoMemory,
+        (memory, kept): (&AutoMemory, &KeptFrusta),
         groups: Option<&CasterGroups>,
     ) -> Plan {
         let camera_setup = camera_for(scene, camera, options);
@@ -120,7 +128,7 @@ impl Plan {
             scene,
             (camera, camera_setup),
             options,
-            memory,
+            (memory, kept),
             (&visible, &casters, leaves),
             groups,
         );
@@ -267,7 +275,7 @@ impl<'a> FrameFacts<'a> {
         scene: &'a Scene,
         (camera, setup): (&Camera, CameraSetup),
         options: &'a Options,
-        memory: &'a AutoMemory,
+        (memory, kept): (&'a AutoMemory, &'a KeptFrusta),
         (visible, casters, leaves): (&[bool], &[bool], Vec<Aabb>),
         groups: Option<&'a CasterGroups>,
     ) -> FrameFacts<'a> {
@@ -319,6 +327,7 @@ impl<'a> FrameFacts<'a> {
             scene,
             options,
             memory,
+            kept,
             view_frustum: Frustum::from_view_proj(
                 &CameraSetup::new(camera, options.width, options.height).view_proj,
             ),
@@ -378,6 +387,7 @@ impl<'a> FrameFacts<'a> {
             view_receivers: Vec::new(),
             view_casters: Vec::new(),
             view_keys: Vec::new(),
+            frusta: None,
             scissor,
             view_scissors: Vec::new(),
             merged: false,
@@ -514,13 +524,23 @@ impl FrameFacts<'_> {
             &self.map_options
         };
         plan.views = match map_options.omni {
-            OmniMode::Frusta if view_light.kind == LightKind::Omni => self
-                .frusta_views(view_light, &plan.receivers, map_options)
-                .inspect(|views| {
+            OmniMode::Frusta if view_light.kind == LightKind::Omni => {
+                let chosen = self.frusta_of(plan.light, view_light, &plan.receivers, map_options);
+                let views = chosen.as_ref().map(|(_, frusta, kept)| {
+                    let views = frusta::frustum_views(
+                        view_light,
+                        frusta,
+                        &self.caster_bounds,
+                        map_options.fit_near_far,
+                    );
                     stats
                         .frusta
-                        .push(frusta_line(plan.light, views, map_options))
-                }),
+                        .push(frusta_line(plan.light, &views, map_options, *kept));
+                    views
+                });
+                plan.frusta = chosen.map(|(key, frusta, _)| (key, frusta));
+                views
+            }
             _ => None,
         }
         .unwrap_or_else(|| shadow_views(view_light, &self.caster_bounds, map_options));
@@ -565,7 +585,7 @@ impl FrameFacts<'_> {
             stats.casters_drawn += drawn.len();
             stats.casters_culled += self.caster_list.len() - drawn.len();
             let key = (on && p.cache_maps).then(|| self.map_key(light_key, view, &drawn));
-            let rect = self.face_rect(l, view.kind, plan.scissor);
+            let rect = self.face_rect(l, view, plan.scissor);
             plan.view_receivers.push(lit);
             plan.view_casters.push(drawn);
             plan.view_keys.push(key);
@@ -591,15 +611,18 @@ impl FrameFacts<'_> {
         None
     }
 
-    /// Several frusta around the receivers in view of omni light `l` (`shadow_map.omni =
-    /// frusta`), each asking for the screen pixels a world unit covers at its distance from the
-    /// camera; None where no receiver is beyond the near plane (the six faces then).
-    fn frusta_views(
+    /// Several frusta around the receivers in view of omni light `l` (index `index`;
+    /// `shadow_map.omni = frusta`), each receiver asking for the screen pixels a world unit
+    /// covers at its distance from the camera: the frusta, what they are chosen for (the key
+    /// [`KeptFrusta`] keeps them by) and whether they are last frame's, kept
+    /// (`plan.keep_frusta`). None where no receiver is beyond the near plane (six faces then).
+    fn frusta_of(
         &self,
+        index: usize,
         l: &Light,
         receivers: &[u32],
         o: &ShadowMapOptions,
-    ) -> Option<Vec<crate::shadow::views::ShadowView>> {
+    ) -> Option<(u64, Vec<frusta::FaceFrustum>, bool)> {
         // Pixels per world unit at distance 1: half the height over tan(fovy / 2).
         let pixels = 0.5 * self.camera.height as f32 * self.camera.projection.y_axis.y.abs();
         let eye = frusta::Eye {
@@ -612,6 +635,18 @@ impl FrameFacts<'_> {
         for &s in receivers {
             frusta::receiver_needs(self.scene.surfaces[s as usize].bounds, &eye, &mut needs);
         }
+        let key = hash_of((
+            &self.map_options_text,
+            mat_bits(&Mat4::from_translation(l.position)),
+            l.radius.to_bits(),
+            (self.camera.width, self.camera.height),
+        ));
+        let keep = self.on() && self.options.plan.keep_frusta;
+        if let Some(kept) = self.kept.get(index, key).filter(|_| keep)
+            && frusta::still_cover(l.position, kept, &needs, KEEP_SLACK)
+        {
+            return Some((key, kept.to_vec(), true));
+        }
         let budget = frusta::Budget {
             texels: 6 * u64::from(o.size).pow(2),
             max_frusta: o.max_frusta as usize,
@@ -619,8 +654,7 @@ impl FrameFacts<'_> {
             max_size: o.size.max((4 * o.size).min(MAX_FRUSTUM_SIZE)),
         };
         let chosen = frusta::choose(l.position, &needs, &budget);
-        (!chosen.is_empty())
-            .then(|| frusta::frustum_views(l, &chosen, &self.caster_bounds, o.fit_near_far))
+        (!chosen.is_empty()).then_some((key, chosen, false))
     }
 
     /// Replaces view `vi` of a `psm` or `tsm` light by its warp (`shadow::warp`), fitted to the
@@ -728,19 +762,31 @@ impl FrameFacts<'_> {
     }
 
     /// Where a view's lit pass may draw: an omni light's six spots get the face's part of the
-    /// light's rectangle; other views the light's rectangle.
-    fn face_rect(&self, l: &Light, kind: ViewKind, light_rect: Option<Scissor>) -> Option<Scissor> {
-        match (kind, light_rect) {
-            (ViewKind::Face(f), Some(light_rect)) => Some(
-                scissor::face_scissor(&self.camera, l.position, l.radius, f).map_or(
-                    Scissor {
-                        width: 0,
-                        height: 0,
-                        ..light_rect
-                    },
-                    |r| r.intersect(&light_rect),
-                ),
-            ),
+    /// light's rectangle, each of several frusta its cell's part; other views the light's
+    /// rectangle.
+    fn face_rect(
+        &self,
+        l: &Light,
+        view: &crate::shadow::views::ShadowView,
+        light_rect: Option<Scissor>,
+    ) -> Option<Scissor> {
+        let (c, pos, radius) = (&self.camera, l.position, l.radius);
+        let part = match (view.kind, view.part) {
+            (ViewKind::Face(_), Some(p)) => {
+                Some(scissor::cell_scissor(c, pos, radius, &view.view, &p.cell))
+            }
+            (ViewKind::Face(f), None) => Some(scissor::face_scissor(c, pos, radius, f)),
+            _ => None,
+        };
+        match (part, light_rect) {
+            (Some(part), Some(light_rect)) => Some(part.map_or(
+                Scissor {
+                    width: 0,
+                    height: 0,
+                    ..light_rect
+                },
+                |r| r.intersect(&light_rect),
+            )),
             _ => light_rect,
         }
     }

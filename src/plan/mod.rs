@@ -9,6 +9,7 @@ pub mod cull;
 pub mod depth_bounds;
 pub mod fallback;
 pub mod fixed_function;
+pub mod kept_frusta;
 pub mod merge;
 pub mod occlusion;
 pub mod pass;
@@ -147,6 +148,9 @@ pub struct LightPlan {
     pub view_scissors: Vec<Option<Scissor>>,
     /// An omni light's six spots lit in one pass (each fragment reads its face's map).
     pub merged: bool,
+    /// `shadow_map.omni = frusta`: the frusta of the views and what they were chosen for (the
+    /// light's position, radius and map options), for [`kept_frusta::KeptFrusta`].
+    pub frusta: Option<(u64, Vec<crate::shadow::frusta::FaceFrustum>)>,
     /// Shadow volumes: the boxes of the receivers whose counts matter; a facing triangle whose
     /// shadow reaches none of them is left out of its volume (empty: every triangle counts).
     pub volume_receivers: Vec<Aabb>,
@@ -262,7 +266,7 @@ impl Plan {
             scene,
             camera,
             options,
-            &AutoMemory::default(),
+            (&AutoMemory::default(), &kept_frusta::KeptFrusta::default()),
             groups.as_ref(),
         )
     }

@@ -8,6 +8,7 @@
 
 use super::Plan;
 use super::auto::AutoMemory;
+use super::kept_frusta::KeptFrusta;
 use super::occlusion::DepthPyramid;
 use super::pass::PassTime;
 use super::volume_draws::{LightVolumeDraws, PieceChoices, VolumeDrawError, VolumePlanner};
@@ -63,6 +64,8 @@ struct DepthMemory {
 #[derive(Default)]
 pub struct Planner {
     memory: AutoMemory,
+    /// Frusta of static omni lights kept across frames (`plan.keep_frusta`).
+    kept_frusta: KeptFrusta,
     /// Each planned light and the technique it ran with in the last frame.
     ran: Vec<(usize, Technique)>,
     /// The scene's caster groups and the revision they were built from.
@@ -126,7 +129,19 @@ impl Planner {
     /// The plan for `camera`, with the costs measured so far.
     pub fn plan(&mut self, scene: &Scene, camera: &Camera, options: &Options) -> Plan {
         let groups = Plan::needs_casters(scene, options).then(|| self.casters(scene));
-        Plan::build_with(scene, camera, options, &self.memory, groups.as_deref())
+        let plan = Plan::build_with(
+            scene,
+            camera,
+            options,
+            (&self.memory, &self.kept_frusta),
+            groups.as_deref(),
+        );
+        self.kept_frusta.record(
+            plan.lights
+                .iter()
+                .filter_map(|l| l.frusta.clone().map(|(key, f)| (l.light, key, f))),
+        );
+        plan
     }
 
     /// What this frame needs of the depth the base pass lays down; `float_depth` says the

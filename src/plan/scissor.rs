@@ -138,10 +138,83 @@ pub fn face_scissor(camera: &CameraSetup, light: Vec3, radius: f32, f: usize) ->
     points_scissor(camera, &points)
 }
 
+/// The part of the screen one of several frusta of an omni light can light within `radius`
+/// (`shadow_map.omni = frusta`): `cell` of the image plane of the face whose view (world to
+/// eye) is `face_view`. As for a whole face, the cell's pyramid within the ball lies in the hull
+/// of the light and the cell's rectangle at distance `radius` along the face's axis.
+pub fn cell_scissor(
+    camera: &CameraSetup,
+    light: Vec3,
+    radius: f32,
+    face_view: &glam::Mat4,
+    cell: &crate::shadow::views::Rect,
+) -> Option<Scissor> {
+    let to_world = face_view.inverse();
+    let mut points = vec![light];
+    for (x, y) in [
+        (cell.min.x, cell.min.y),
+        (cell.min.x, cell.max.y),
+        (cell.max.x, cell.min.y),
+        (cell.max.x, cell.max.y),
+    ] {
+        points.push(to_world.transform_point3(Vec3::new(x, y, -1.0) * radius));
+    }
+    points_scissor(camera, &points)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
     use crate::scene::Camera;
+
+    /// Every point of a cell's pyramid within the ball projects inside the cell's rectangle,
+    /// which is smaller than the whole face's.
+    #[test]
+    fn a_cell_gets_a_rectangle_holding_its_part_of_the_face() {
+        use crate::geometry::projection::cube_face_view;
+        use crate::shadow::views::Rect;
+        let c = camera();
+        let light = Vec3::new(300.0, 40.0, -20.0);
+        let radius = 250.0;
+        let f = 1; // -X: toward the camera
+        let view = cube_face_view(light, f);
+        let cell = Rect {
+            min: glam::Vec2::new(-0.5, 0.0),
+            max: glam::Vec2::new(0.0, 0.5),
+        };
+        let s = cell_scissor(&c, light, radius, &view, &cell).unwrap();
+        let face = face_scissor(&c, light, radius, f).unwrap();
+        assert!(s.area() < face.area() / 2, "{s:?} {face:?}");
+        let to_world = view.inverse();
+        for i in 0..400 {
+            let t = i as f32;
+            let (x, y) = (
+                cell.min.x + (cell.max.x - cell.min.x) * (t * 0.37).fract(),
+                cell.min.y + (cell.max.y - cell.min.y) * (t * 0.61).fract(),
+            );
+            let dir = to_world
+                .transform_vector3(Vec3::new(x, y, -1.0))
+                .normalize();
+            let p = light + dir * radius * (t * 0.13).fract();
+            let clip = c.view_proj * p.extend(1.0);
+            if clip.w <= 0.0 {
+                continue;
+            }
+            let px = (clip.x / clip.w * 0.5 + 0.5) * 640.0;
+            let py = (clip.y / clip.w * 0.5 + 0.5) * 480.0;
+            if !(0.0..640.0).contains(&px) || !(0.0..480.0).contains(&py) {
+                continue;
+            }
+            assert!(
+                px >= s.x as f32 - 1.0 && px <= (s.x + s.width) as f32 + 1.0,
+                "{px} {s:?}"
+            );
+            assert!(
+                py >= s.y as f32 - 1.0 && py <= (s.y + s.height) as f32 + 1.0,
+                "{py} {s:?}"
+            );
+        }
+    }
 
     fn camera() -> CameraSetup {
         CameraSetup::new(

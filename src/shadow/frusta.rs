@@ -322,6 +322,32 @@ pub fn choose(light: Vec3, needs: &[Need], budget: &Budget) -> Vec<FaceFrustum> 
         .collect()
 }
 
+/// Whether frusta chosen earlier for a light at `light` still serve `needs`: every receiver's
+/// footprint on each face it reaches meets a frustum's cell there, and what it covers of each
+/// such cell lies in that frustum's rectangle (up to `slack` of the plane). A static light keeps
+/// its frusta (and so its maps) while they do (Forsyth: persistent frusta for static lights).
+pub fn still_cover(light: Vec3, kept: &[FaceFrustum], needs: &[Need], slack: f32) -> bool {
+    let marks = marks(light, needs);
+    marks.iter().enumerate().all(|(face, marks)| {
+        let own: Vec<&FaceFrustum> = kept.iter().filter(|f| f.face == face).collect();
+        marks.iter().all(|m| {
+            let mut met = false;
+            for f in &own {
+                let Some(part) = m.rect.intersection(&f.cell) else {
+                    continue;
+                };
+                met = true;
+                if (part.min - f.rect.min).min_element() < -slack
+                    || (f.rect.max - part.max).min_element() < -slack
+                {
+                    return false;
+                }
+            }
+            met
+        })
+    })
+}
+
 /// The shadow views of `frusta` around an omni `light`: each its face's view and the
 /// off-centre projection over its rectangle, near and far fitted as for the whole face (thesis
 /// 2.2.2; `casters` are the casters' world bounds).
@@ -676,6 +702,46 @@ mod tests {
                 }
             }
         }
+    }
+
+    /// Frusta stay valid while the receivers stay within them: a receiver moved inside its
+    /// rectangle keeps them, one moved out of it (or onto a face without frusta) does not.
+    #[test]
+    fn kept_frusta_serve_while_the_receivers_stay_within_them() {
+        let light = Vec3::ZERO;
+        let need = |c: Vec3| Need {
+            bounds: cube(c, 5.0),
+            texels_per_unit: 2.0,
+            weight: 20.0,
+        };
+        let big = Need {
+            bounds: cube(Vec3::new(100.0, 0.0, 0.0), 40.0),
+            texels_per_unit: 1.0,
+            weight: 100.0,
+        };
+        let kept = choose(
+            light,
+            &[big, need(Vec3::new(100.0, 10.0, 0.0))],
+            &budget(256),
+        );
+        assert!(still_cover(
+            light,
+            &kept,
+            &[big, need(Vec3::new(100.0, 12.0, 0.0))],
+            1e-4
+        ));
+        assert!(!still_cover(
+            light,
+            &kept,
+            &[big, need(Vec3::new(100.0, 90.0, 0.0))],
+            1e-4
+        ));
+        assert!(!still_cover(
+            light,
+            &kept,
+            &[big, need(Vec3::new(-100.0, 0.0, 0.0))],
+            1e-4
+        ));
     }
 
     #[test]
