@@ -512,6 +512,12 @@ impl Renderer {
         self.shadow_maps.texture_count()
     }
 
+    /// Drops the frusta static omni lights kept (`plan.keep_frusta`): the next frame chooses
+    /// them afresh for its own view.
+    pub fn forget_kept_frusta(&mut self) {
+        self.planner.forget_kept_frusta();
+    }
+
     /// Uploads a scene, replacing the previous one.
     pub fn load_scene(&mut self, scene: &Scene) -> Result<(), RenderError> {
         if let Some(old) = self.gpu.take() {

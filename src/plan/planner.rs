@@ -82,6 +82,11 @@ impl Planner {
         *self = Planner::default();
     }
 
+    /// Drops the frusta kept across frames (`plan.keep_frusta`).
+    pub fn forget_kept_frusta(&mut self) {
+        self.kept_frusta = KeptFrusta::default();
+    }
+
     /// What `technique = auto` has measured so far.
     pub fn memory(&self) -> &AutoMemory {
         &self.memory

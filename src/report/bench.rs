@@ -691,6 +691,9 @@ impl<'a> Bench<'a> {
 
     /// Error of `options` on the first frame of the path, with that frame's volume stats.
     fn error(&mut self, options: &Options) -> Result<FrameError, RenderError> {
+        // Frusta kept from the path's last frames are sized for another view: the first frame's
+        // error is the configuration's own, not its history's.
+        self.renderer.forget_kept_frusta();
         let c = self.capture(options)?;
         Ok(FrameError {
             total: c.total,
