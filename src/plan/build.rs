@@ -12,7 +12,7 @@ use crate::options::{
 };
 use crate::scene::{Camera, Light, LightKind, Scene, SurfaceOwner};
 use crate::shadow::frusta;
-use crate::shadow::views::{ViewKind, shadow_views};
+use crate::shadow::views::{Rect, ViewKind, shadow_views};
 use crate::shadow::volume::{self, CasterGroup, CasterGroups, Counting, PieceRef};
 use crate::shadow::warp::{self, WarpInput};
 use glam::{Mat4, Vec3};
@@ -551,21 +551,30 @@ impl FrameFacts<'_> {
             l.radius.to_bits(),
             format!("{:?}", l.kind),
         ));
+        // Several frusta: each receiver's footprint on a face, once for all that face's frusta.
+        let mut footprints: [Option<Vec<Option<Rect>>>; 6] = Default::default();
         for vi in 0..plan.views.len() {
             let view = &plan.views[vi];
             let mut drawn = self.map_casters(l, view.kind, &view.view_proj());
             let lit: Vec<u32> = match (view.kind, view.part) {
                 // One of several frusta lights only the receivers in its cell.
-                (ViewKind::Face(f), Some(part)) => plan
-                    .receivers
-                    .iter()
-                    .copied()
-                    .filter(|&s| {
-                        let b = &self.scene.surfaces[s as usize].bounds;
-                        frusta::footprint(l.position, f, b)
-                            .is_some_and(|r| r.intersection(&part.cell).is_some())
-                    })
-                    .collect(),
+                (ViewKind::Face(f), Some(part)) => {
+                    let on_face = footprints[f].get_or_insert_with(|| {
+                        plan.receivers
+                            .iter()
+                            .map(|&s| {
+                                let b = &self.scene.surfaces[s as usize].bounds;
+                                frusta::footprint(l.position, f, b)
+                            })
+                            .collect()
+                    });
+                    plan.receivers
+                        .iter()
+                        .zip(on_face.iter())
+                        .filter(|(_, r)| r.is_some_and(|r| r.intersection(&part.cell).is_some()))
+                        .map(|(&s, _)| s)
+                        .collect()
+                }
                 (ViewKind::Face(f), None) if on && p.cull_receivers => {
                     let pyramid = cull::face_pyramid(l.position, f);
                     plan.receivers

@@ -437,6 +437,25 @@ mod tests {
         }
     }
 
+    /// Walls all around a light at the origin, 50 units away, each asking for 1 texel per unit.
+    fn room() -> Vec<Need> {
+        (0..6)
+            .map(|f| {
+                let axis = crate::plan::cull::face_axes(f).0;
+                let c = axis * 50.0;
+                let h = Vec3::splat(60.0) - axis.abs() * 59.0;
+                Need {
+                    bounds: Aabb {
+                        min: c - h,
+                        max: c + h,
+                    },
+                    texels_per_unit: 1.0,
+                    weight: 100.0,
+                }
+            })
+            .collect()
+    }
+
     fn texels(f: &[FaceFrustum]) -> u64 {
         f.iter().map(|f| (f.size as u64).pow(2)).sum()
     }
@@ -471,21 +490,7 @@ mod tests {
     #[test]
     fn a_room_asking_for_the_same_everywhere_keeps_the_six_faces() {
         let light = Vec3::ZERO;
-        let walls: Vec<Need> = (0..6)
-            .map(|f| {
-                let axis = crate::plan::cull::face_axes(f).0;
-                let c = axis * 50.0;
-                let h = Vec3::splat(60.0) - axis.abs() * 59.0;
-                Need {
-                    bounds: Aabb {
-                        min: c - h,
-                        max: c + h,
-                    },
-                    texels_per_unit: 1.0,
-                    weight: 100.0,
-                }
-            })
-            .collect();
+        let walls = room();
         let f = choose(light, &walls, &budget(256));
         assert_eq!(f.len(), 6, "{f:?}");
         for (i, f) in f.iter().enumerate() {
@@ -645,21 +650,7 @@ mod tests {
     #[test]
     fn a_receiver_at_the_camera_does_not_starve_the_others() {
         let light = Vec3::ZERO;
-        let mut needs: Vec<Need> = (0..6)
-            .map(|f| {
-                let axis = crate::plan::cull::face_axes(f).0;
-                let c = axis * 50.0;
-                let h = Vec3::splat(60.0) - axis.abs() * 59.0;
-                Need {
-                    bounds: Aabb {
-                        min: c - h,
-                        max: c + h,
-                    },
-                    texels_per_unit: 1.0,
-                    weight: 100.0,
-                }
-            })
-            .collect();
+        let mut needs = room();
         needs.push(Need {
             bounds: cube(Vec3::new(40.0, 5.0, 5.0), 1.0),
             texels_per_unit: 1000.0,

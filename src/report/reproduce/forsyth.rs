@@ -35,6 +35,29 @@ const ERROR_HEADER: [(&str, Align); 4] = [
     ("error outside the band", Align::Right),
 ];
 
+/// A table of measured configurations: the name (under `first`), the error columns and the
+/// frame time; each configuration's render command goes to the section's regenerate list.
+fn error_table(
+    lab: &Lab,
+    s: &mut Section,
+    first: &str,
+    configs: &[(&str, Vec<&str>)],
+    rows: &[BenchRow],
+) -> Table {
+    let mut header = vec![(first, Align::Left)];
+    header.extend(ERROR_HEADER);
+    header.push(("frame ms", Align::Right));
+    let mut t = Table::new(&header);
+    for ((name, sets), r) in configs.iter().zip(rows) {
+        let mut row = vec![name.to_string()];
+        row.extend(error_cells(r));
+        row.push(ms(r.frame_ms.median));
+        t.push(row);
+        s.regenerate.push(lab.render_command(sets));
+    }
+    t
+}
+
 /// ID and priority buffers against depth maps on the grazing-light hard case (lab of
 /// `assets/hard/grazing.toml`): the bias each needs, acne, the edge filter's shrink.
 pub fn buffers(lab: &mut Lab) -> Result<Section, ReproduceError> {
@@ -82,17 +105,7 @@ pub fn buffers(lab: &mut Lab) -> Result<Section, ReproduceError> {
         })
         .collect();
     let rows = lab.measure(&configs)?;
-    let mut header = vec![("buffer", Align::Left)];
-    header.extend(ERROR_HEADER);
-    header.push(("frame ms", Align::Right));
-    let mut t = Table::new(&header);
-    for ((name, sets), r) in configs.iter().zip(&rows) {
-        let mut row = vec![name.to_string()];
-        row.extend(error_cells(r));
-        row.push(ms(r.frame_ms.median));
-        t.push(row);
-        s.regenerate.push(lab.render_command(sets));
-    }
+    let t = error_table(lab, &mut s, "buffer", &configs, &rows);
     let e = |i: usize| rows[i].error.total;
     for (key, i) in [
         ("depth_offset", 0),
@@ -163,17 +176,7 @@ pub fn frusta(lab: &mut Lab) -> Result<Section, ReproduceError> {
         .map(|(n, sets)| (n.as_str(), sets.iter().map(String::as_str).collect()))
         .collect();
     let rows = lab.measure(&borrowed)?;
-    let mut header = vec![("omni light, map size", Align::Left)];
-    header.extend(ERROR_HEADER);
-    header.push(("frame ms", Align::Right));
-    let mut t = Table::new(&header);
-    for ((name, sets), r) in borrowed.iter().zip(&rows) {
-        let mut row = vec![name.to_string()];
-        row.extend(error_cells(r));
-        row.push(ms(r.frame_ms.median));
-        t.push(row);
-        s.regenerate.push(lab.render_command(sets));
-    }
+    let t = error_table(lab, &mut s, "omni light, map size", &borrowed, &rows);
     let e = |i: usize| rows[i].error.total;
     for (key, i) in [
         ("faces_256", 0),

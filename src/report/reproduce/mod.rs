@@ -313,52 +313,22 @@ pub fn run(
         // q3dm6ish's claims were skipped: count them as done.
         bar.inc(claims::SECTIONS as u64);
     }
-    {
-        // ID and priority buffers on the grazing light, where depth maps need their bias most.
-        let name = "../hard/grazing";
-        let (scene, options, _) = load_scene(settings, name)?;
+    // ID and priority buffers on the grazing light, where depth maps need their bias most;
+    // multiple frusta where the camera faces an omni light; perspective shadow maps on the hard
+    // case made for them.
+    for (case, section) in [
+        (
+            "grazing",
+            forsyth::buffers as fn(&mut Lab) -> Result<Section, ReproduceError>,
+        ),
+        ("duelling_omni", forsyth::frusta),
+        ("near_receiver", thesis::chapter4),
+    ] {
+        let (scene, options, _) = load_scene(settings, &format!("../hard/{case}"))?;
         renderer.load_scene(&scene)?;
-        let mut lab = Lab::new(renderer, &scene, "grazing", options, settings, out, &bar)
-            .with_scene_file("assets/hard/grazing.toml");
-        sections.push(forsyth::buffers(&mut lab)?);
-        report.rows.extend(lab.into_rows());
-        bar.inc(1);
-    }
-    {
-        // Multiple frusta where the camera faces an omni light.
-        let name = "../hard/duelling_omni";
-        let (scene, options, _) = load_scene(settings, name)?;
-        renderer.load_scene(&scene)?;
-        let mut lab = Lab::new(
-            renderer,
-            &scene,
-            "duelling_omni",
-            options,
-            settings,
-            out,
-            &bar,
-        )
-        .with_scene_file("assets/hard/duelling_omni.toml");
-        sections.push(forsyth::frusta(&mut lab)?);
-        report.rows.extend(lab.into_rows());
-        bar.inc(1);
-    }
-    {
-        // Perspective shadow maps on the hard case made for them.
-        let name = "../hard/near_receiver";
-        let (scene, options, _) = load_scene(settings, name)?;
-        renderer.load_scene(&scene)?;
-        let mut lab = Lab::new(
-            renderer,
-            &scene,
-            "near_receiver",
-            options,
-            settings,
-            out,
-            &bar,
-        )
-        .with_scene_file("assets/hard/near_receiver.toml");
-        sections.push(thesis::chapter4(&mut lab)?);
+        let mut lab = Lab::new(renderer, &scene, case, options, settings, out, &bar)
+            .with_scene_file(&format!("assets/hard/{case}.toml"));
+        sections.push(section(&mut lab)?);
         report.rows.extend(lab.into_rows());
         bar.inc(1);
     }
