@@ -42,6 +42,7 @@ fn quick_report_measures_every_section_and_writes_it() {
         "forsyth-ids",
         "forsyth-shootout",
         "forsyth-frusta",
+        "forsyth-priority-mips",
         "vector-subdivision",
     ] {
         let s = report
@@ -108,6 +109,12 @@ fn quick_report_measures_every_section_and_writes_it() {
     println!("forsyth frusta: {:?}", ff.numbers);
     assert!(ff.number("frusta_256") < ff.number("faces_256"));
     assert!(ff.number("frusta_512") < ff.number("faces_512"));
+    // Forsyth: the mip chain votes away stripes finer than a pixel (tests/id_buffers.rs gives
+    // the reasons for the bounds).
+    let fp = report.section("forsyth-priority-mips").unwrap();
+    println!("forsyth priority mips: {:?}", fp.numbers);
+    assert!(fp.number("unfiltered") > 0.15);
+    assert!(fp.number("mipmapped") < fp.number("unfiltered") / 10.0);
     // Vector: the two exact references agree outside the boundary band (tests/subdivision.rs
     // says which pixels may differ and why).
     let v = report.section("vector-subdivision").unwrap();

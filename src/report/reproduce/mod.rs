@@ -314,7 +314,8 @@ pub fn run(
         bar.inc(claims::SECTIONS as u64);
     }
     // ID and priority buffers on the grazing light, where depth maps need their bias most;
-    // multiple frusta where the camera faces an omni light; perspective shadow maps on the hard
+    // multiple frusta where the camera faces an omni light; mipmapped priority buffers where
+    // shadow stripes are finer than a pixel; perspective shadow maps on the hard
     // case made for them.
     for (case, section) in [
         (
@@ -322,6 +323,7 @@ pub fn run(
             forsyth::buffers as fn(&mut Lab) -> Result<Section, ReproduceError>,
         ),
         ("duelling_omni", forsyth::frusta),
+        ("minified_grate", forsyth::priority_mips),
         ("near_receiver", thesis::chapter4),
     ] {
         let (scene, options, _) = load_scene(settings, &format!("../hard/{case}"))?;
