@@ -18,6 +18,8 @@ pub enum StepKind {
     Base,
     /// Count a light's shadow volumes into the stencil buffer.
     Stencil,
+    /// Mark a light's shadowed fragments of the subdivision into the stencil buffer.
+    Fragments,
     /// The hybrid's computation mask (and counts) in the stencil: where the map decides.
     ComputationMask,
     /// A light's additive pass.
@@ -55,6 +57,11 @@ pub struct CacheStats {
     /// Caster groups whose GPU extrusion meshes were built and uploaded for this frame (their
     /// first use, or their model's new pose).
     pub extrusions_uploaded: usize,
+    /// Subdivided lights whose fragments were built or read from the disk cache and uploaded
+    /// for this frame (their first frame, or a change of the light or its geometry), and
+    /// the shadowed fragment triangles they drew.
+    pub subdivisions_renewed: usize,
+    pub fragment_triangles: usize,
 }
 
 #[derive(Debug, Clone)]

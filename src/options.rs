@@ -366,6 +366,13 @@ option_enum! {
         /// Chan & Durand's hybrid (2004, thesis chapter 5): a shadow map decides where its
         /// 2×2 compares agree; shadow volumes are counted only at the other pixels (`hybrid.*`).
         Hybrid = "hybrid",
+        /// Vector's light-volume subdivision (Chin & Feiner's shadow-volume BSP tree): each
+        /// light's receivers cut once, in object space, into lit and shadowed fragments (built
+        /// when the light or a triangle in its range changes, kept on disk like `shadowlab
+        /// subdivide`); the shadowed ones are marked into the stencil over the frame's depth
+        /// and the lit pass draws where none is. Alpha-tested casters are solid. Meant for
+        /// static lights and casters: a moving one is subdivided again every frame.
+        Subdivision = "subdivision",
     }
 }
 
@@ -728,7 +735,9 @@ define_options! {
         /// (`estimate.*`), else estimated (see `plan::auto`).
         accuracy: f32 = 0.5, in 0.0 ..= 100.0;
         /// The techniques `technique = auto` chooses among, comma separated (any of
-        /// shadow_map, psm, tsm, shadow_volume, hybrid). Each one is measured twice before a
+        /// shadow_map, psm, tsm, shadow_volume, hybrid, subdivision; the subdivision's first
+        /// frame builds it, its cost is the cheapest of its first frames, as for every
+        /// technique). Each one is measured twice before a
         /// one-frame command's frame, so every addition costs learning frames.
         auto_among: String = "shadow_map,shadow_volume".to_string();
     }

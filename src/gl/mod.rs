@@ -8,6 +8,7 @@ pub mod depth_reduce;
 pub mod egl;
 pub mod extrusion;
 pub mod fixed;
+pub mod fragments;
 pub mod id_tables;
 pub mod legacy;
 pub mod osmesa;

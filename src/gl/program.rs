@@ -40,6 +40,7 @@ pub mod sources {
     pub const VOLUME_VERT: &str = include_str!("../../shaders/volume.vert");
     pub const VOLUME_GPU_VERT: &str = include_str!("../../shaders/volume_gpu.vert");
     pub const VOLUME_FRAG: &str = include_str!("../../shaders/volume.frag");
+    pub const FRAGMENTS_VERT: &str = include_str!("../../shaders/fragments.vert");
     pub const FULLSCREEN_VERT: &str = include_str!("../../shaders/fullscreen.vert");
     pub const FILL_FRAG: &str = include_str!("../../shaders/fill.frag");
     pub const DEPTH_REDUCE_FRAG: &str = include_str!("../../shaders/depth_reduce.frag");

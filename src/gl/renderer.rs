@@ -11,6 +11,7 @@ use super::debug;
 use super::depth_reduce::DepthReducer;
 use super::extrusion::{ExtrudedDraw, Extrusions};
 use super::fixed::{self, FixedFunction};
+use super::fragments::{FragmentBuffers, LightFragmentDraw};
 use super::id_tables::IdTables;
 use super::legacy::Legacy;
 use super::passes::lit::{LitShadow, ShadowBinding};
@@ -61,6 +62,8 @@ pub enum RenderError {
     Unsupported(String),
     #[error(transparent)]
     VolumeDraws(#[from] crate::plan::volume_draws::VolumeDrawError),
+    #[error(transparent)]
+    Fragments(#[from] super::fragments::FragmentError),
 }
 
 /// What a frame should produce besides its image and timings.
@@ -243,6 +246,8 @@ struct Programs {
     /// The depth pass storing another matrix's depth than it draws with (trapezoidal maps).
     depth_warp: Program,
     volume: passes::stencil::VolumePrograms,
+    /// The subdivision's shadowed fragments into the stencil.
+    fragments: Program,
     fill: Program,
     /// The depth's 4×4 block maxima for the planner.
     depth_reduce: Program,
@@ -292,6 +297,13 @@ impl Programs {
                     &[],
                 )?,
             },
+            fragments: Program::new(
+                gl,
+                "fragments",
+                sources::FRAGMENTS_VERT,
+                Some(sources::VOLUME_FRAG),
+                &[],
+            )?,
             fill: Program::new(
                 gl,
                 "fill",
@@ -374,6 +386,7 @@ impl Programs {
             &self.depth_warp,
             &self.volume.built,
             &self.volume.extruded,
+            &self.fragments,
             &self.fill,
             &self.depth_reduce,
             &self.priority_mips,
@@ -405,6 +418,8 @@ pub struct Renderer {
     volume_buffers: VolumeBuffers,
     /// Caster groups' meshes for volumes the GPU extrudes.
     extrusions: Extrusions,
+    /// Every subdivided light's shadowed fragments (`technique = subdivision`).
+    fragments: FragmentBuffers,
     /// Created on the first frame that asks for masks.
     measure_targets: Option<(GBufferTarget, MaskTarget)>,
     /// Core profile draws need a bound VAO even without attributes (full-screen triangles).
@@ -478,6 +493,7 @@ impl Renderer {
             id_tables: IdTables::default(),
             volume_buffers: VolumeBuffers::default(),
             extrusions: Extrusions::default(),
+            fragments: FragmentBuffers::default(),
             measure_targets: None,
             empty_vao,
             depth_reducer: None,
@@ -530,6 +546,7 @@ impl Renderer {
         self.shadow_maps.forget();
         self.volume_buffers.delete(&self.gl);
         self.extrusions.delete(&self.gl);
+        self.fragments.delete(&self.gl);
         self.planner.forget();
         Ok(())
     }
@@ -698,6 +715,7 @@ impl Renderer {
             planner: &mut self.planner,
             volume_buffers: &mut self.volume_buffers,
             extrusions: &mut self.extrusions,
+            fragments: &mut self.fragments,
             extruded: HashMap::new(),
             depth_reducer: &mut self.depth_reducer,
             last_maps: &mut self.last_maps,
@@ -906,6 +924,7 @@ struct FrameRun<'a> {
     planner: &'a mut Planner,
     volume_buffers: &'a mut VolumeBuffers,
     extrusions: &'a mut Extrusions,
+    fragments: &'a mut FragmentBuffers,
     /// Per light, the groups the GPU extrudes this frame.
     extruded: HashMap<usize, Vec<ExtrudedDraw>>,
     depth_reducer: &'a mut Option<DepthReducer>,
@@ -929,6 +948,7 @@ impl<'a> FrameRun<'a> {
         let maps = or_stopped!(self.shadow_map_passes());
         or_stopped!(self.base_pass());
         self.volume_draws()?;
+        self.subdivisions()?;
         let stencil = or_stopped!(self.light_passes(&maps));
         set_scissor(self.ctx.gl, None);
         let passes = self.timer.finish(self.ctx.gl);
@@ -1351,6 +1371,38 @@ impl<'a> FrameRun<'a> {
         Ok(())
     }
 
+    /// Each subdivided light's fragments made current (kept while the light and the triangles
+    /// in its range stay as they were).
+    fn subdivisions(&mut self) -> Result<(), RenderError> {
+        let (gl, plan) = (self.ctx.gl, self.ctx.plan);
+        if !plan.any(Technique::Subdivision) {
+            return Ok(());
+        }
+        // The pass before is over: the CPU work here is timed on its own.
+        self.timer.end(gl);
+        for lp in plan.lights.iter() {
+            if lp.technique != Technique::Subdivision {
+                continue;
+            }
+            let update = self.fragments.update(gl, self.ctx.scene, lp.light)?;
+            self.timer
+                .record_cpu(PassId::light(lp.light, Stage::Subdivision), update.ms);
+            self.cache.subdivisions_renewed += usize::from(update.renewed);
+            self.cache.fragment_triangles += self
+                .fragments
+                .draw_of(lp.light)
+                .map_or(0, |f| f.triangles());
+        }
+        Ok(())
+    }
+
+    /// The light's shadowed fragments, when it is subdivided this frame.
+    fn fragments_of(&self, lp: &LightPlan) -> Option<LightFragmentDraw> {
+        (lp.technique == Technique::Subdivision)
+            .then(|| self.fragments.draw_of(lp.light))
+            .flatten()
+    }
+
     /// The light's volume draws with their buffers, when it has volumes this frame.
     fn volumes_of(&self, lp: &LightPlan) -> Option<LightVolumes<'_>> {
         if !lp.technique.uses_volumes() {
@@ -1405,6 +1457,10 @@ impl<'a> FrameRun<'a> {
                 }
             } else if self.volumes_of(lp).is_some() {
                 if let Some(image) = go_on!(self.volume_light(lp)) {
+                    stencil_image = Some(image);
+                }
+            } else if let Some(f) = self.fragments_of(lp) {
+                if let Some(image) = go_on!(self.subdivision_light(lp, &f)) {
                     stencil_image = Some(image);
                 }
             } else {
@@ -1550,6 +1606,42 @@ impl<'a> FrameRun<'a> {
         Ok(ControlFlow::Continue(stencil))
     }
 
+    /// A subdivided light: its shadowed fragments marked into the stencil, its lit pass where
+    /// none is. Returns its stencil when the request asks for it.
+    fn subdivision_light(
+        &mut self,
+        lp: &LightPlan,
+        f: &LightFragmentDraw,
+    ) -> Flow<Option<StencilImage>> {
+        let gl = self.ctx.gl;
+        self.timer
+            .begin(gl, PassId::light(lp.light, Stage::Stencil));
+        match self.fixed {
+            Some(ff) => fixed::stencil::mark_fragments(&self.ctx, ff, f),
+            None => passes::stencil::mark_fragments(&self.ctx, &self.programs.fragments, f),
+        }
+        let (w, h) = (self.target.width, self.target.height);
+        let fbo = self.target.fbo;
+        go_on!(self.step(StepKind::Fragments, Some(lp), None, |_| {
+            debug::stencil_image(&debug::read_stencil(gl, fbo, w, h), w, h, false)
+        }));
+        let stencil = self.requested_stencil(lp, false);
+        self.timer.begin(gl, PassId::light(lp.light, Stage::Lit));
+        let shadow = LitShadow::Stencil { test: true };
+        match self.fixed {
+            Some(ff) => fixed::lit::draw(&self.ctx, ff, lp, &shadow, &lp.receivers),
+            None => passes::lit::draw(
+                &self.ctx,
+                self.lit_program(LitVariant::plain(false)),
+                lp,
+                &shadow,
+                &lp.receivers,
+            ),
+        }
+        go_on!(self.step(StepKind::Lit, Some(lp), None, Self::color_image));
+        Ok(ControlFlow::Continue(stencil))
+    }
+
     /// Volumes and silhouettes drawn over the finished frame, when asked for (untimed).
     fn overlays(&self) {
         let o = self.request.overlays;
@@ -1625,6 +1717,16 @@ impl<'a> FrameRun<'a> {
                         values,
                     });
                     continue;
+                }
+                None if let Some(f) = self.fragments_of(lp) => {
+                    passes::stencil::mark_fragments(&self.ctx, &self.programs.fragments, &f);
+                    passes::lit::draw_mask(
+                        &self.ctx,
+                        self.lit_program(LitVariant::plain(true)),
+                        lp,
+                        &LitShadow::Stencil { test: true },
+                        &lp.receivers,
+                    );
                 }
                 Some(v) => {
                     passes::stencil::draw(&self.ctx, &self.programs.volume, &v, lp.scissor, false);
@@ -1719,10 +1821,14 @@ impl FrameRun<'_> {
         lp: &LightPlan,
         bindings: &[(bool, ShadowBinding, &[u32], Option<Scissor>)],
     ) {
+        let shadow = LitShadow::Stencil { test: true };
         match self.volumes_of(lp) {
             Some(v) => {
                 fixed::stencil::draw(&self.ctx, ff, &v, lp.scissor);
-                let shadow = LitShadow::Stencil { test: true };
+                fixed::lit::draw_mask(&self.ctx, ff, lp, &shadow, &lp.receivers);
+            }
+            None if let Some(f) = self.fragments_of(lp) => {
+                fixed::stencil::mark_fragments(&self.ctx, ff, &f);
                 fixed::lit::draw_mask(&self.ctx, ff, lp, &shadow, &lp.receivers);
             }
             None => fixed_maps(&self.ctx, ff, lp, bindings, true),
@@ -1901,6 +2007,7 @@ impl Drop for Renderer {
         self.id_tables.delete(gl);
         self.volume_buffers.delete(gl);
         self.extrusions.delete(gl);
+        self.fragments.delete(gl);
         if let Some((g, m)) = self.measure_targets.take() {
             g.delete(gl);
             m.delete(gl);

@@ -147,6 +147,24 @@ pub fn explain(step: &Step, options: &Options, executed: Executed) -> Explanatio
                        emulated)."
                 .into(),
         },
+        StepKind::Fragments => Explanation {
+            title: format!("Shadowed fragments into the stencil ({who})"),
+            what: "Vector's light-volume subdivision cut the light's receivers, once and in \
+                   object space, into lit and shadowed fragments (each caster's light volume \
+                   clipping what lies behind it). The shadowed fragments are drawn over the \
+                   unlit pass's depth without colour or depth writes: where one is the visible \
+                   surface the stencil becomes 1 (bright). Nothing is counted and no volume \
+                   reaches the camera: the camera moves for free."
+                .into(),
+            gl_state: format!(
+                "glClear(GL_STENCIL_BUFFER_BIT); glColorMask(0,0,0,0); glDepthMask(0); \
+                 glDepthFunc(GL_LEQUAL); glPolygonOffset({}, {}) (the fragments' corners were \
+                 rounded from f64); glStencilFunc(GL_ALWAYS, 1, ~0), glStencilOp(KEEP, KEEP, \
+                 REPLACE); each surface's fragments culled as its material is.",
+                super::passes::stencil::FRAGMENT_OFFSET.0,
+                super::passes::stencil::FRAGMENT_OFFSET.1
+            ),
+        },
         StepKind::Stencil => Explanation {
             title: format!("Shadow volumes into the stencil ({who})"),
             what: format!(
@@ -210,6 +228,10 @@ pub fn explain(step: &Step, options: &Options, executed: Executed) -> Explanatio
                      decides; at the other (silhouette) pixels the stencil count does, so the \
                      stencil test keeps count zero and non-silhouette pixels alike and the \
                      shader drops the fragments the map shadows"
+                }
+                crate::options::Technique::Subdivision => {
+                    "the stencil test keeps only fragments where no shadowed fragment of the \
+                     subdivision was marked"
                 }
                 crate::options::Technique::None | crate::options::Technique::Auto => {
                     "no shadow test"

@@ -73,7 +73,8 @@ fn technique_options(technique: Technique, options: &Options) -> String {
         Technique::Hybrid => {
             serde_json::to_string(&(&options.shadow_map, &options.shadow_volume, &options.hybrid))
         }
-        Technique::None | Technique::Auto => Ok(String::new()),
+        // The subdivision is exact: no option changes its error.
+        Technique::Subdivision | Technique::None | Technique::Auto => Ok(String::new()),
     }
     .unwrap_or_default()
 }
@@ -174,7 +175,8 @@ impl AutoMemory {
 /// The expected error, as a fraction of receiver pixels, of `technique` for a light.
 pub fn estimated_error(technique: Technique, options: &Options, alpha_casters: bool) -> f64 {
     match technique {
-        Technique::ShadowVolume | Technique::Hybrid => {
+        // The subdivision's casters are solid, as the volumes' are.
+        Technique::ShadowVolume | Technique::Hybrid | Technique::Subdivision => {
             if alpha_casters {
                 0.01
             } else {

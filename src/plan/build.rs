@@ -404,7 +404,9 @@ impl<'a> FrameFacts<'a> {
             Technique::Hybrid => self
                 .plan_maps(&mut plan, stats)
                 .or_else(|| self.plan_volumes(&mut plan, stats)),
-            Technique::None | Technique::Auto => None,
+            // Its fragments are the renderer's, per light, built where the light's
+            // geometry changed: the plan only says which lights and receivers.
+            Technique::Subdivision | Technique::None | Technique::Auto => None,
         };
         if let Some(why) = left_without {
             plan.technique = Technique::None;

@@ -19,7 +19,11 @@ pub enum Stage {
     VolumeBuild,
     /// The planner's per-frame decisions on every light's volume pieces, and the uploads.
     VolumePieces,
-    /// A light's volumes counted into the stencil buffer.
+    /// A light's light-volume subdivision made current: its key checked, and where the light
+    /// or its geometry changed, built (or read from the disk cache) and uploaded.
+    Subdivision,
+    /// A light's volumes counted (or the subdivision's shadowed fragments marked) into the
+    /// stencil buffer.
     Stencil,
     /// The hybrid's classification: its computation mask marked into the stencil.
     Classify,
@@ -39,6 +43,7 @@ impl Stage {
             Stage::Occlusion => "occlusion",
             Stage::VolumeBuild => "volume_build",
             Stage::VolumePieces => "volume_pieces",
+            Stage::Subdivision => "subdivision",
             Stage::Stencil => "stencil",
             Stage::Classify => "classify",
             Stage::Lit => "lit",
@@ -46,13 +51,14 @@ impl Stage {
         }
     }
 
-    const ALL: [Stage; 10] = [
+    const ALL: [Stage; 11] = [
         Stage::ShadowMap,
         Stage::DepthCopy,
         Stage::Base,
         Stage::Occlusion,
         Stage::VolumeBuild,
         Stage::VolumePieces,
+        Stage::Subdivision,
         Stage::Stencil,
         Stage::Classify,
         Stage::Lit,

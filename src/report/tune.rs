@@ -89,13 +89,14 @@ pub fn space() -> Vec<Dimension> {
     ]
 }
 
-/// The techniques searched: the thesis's four and trapezoidal maps.
-pub const TECHNIQUES: [Technique; 5] = [
+/// The techniques searched: the thesis's four, trapezoidal maps and Vector's subdivision.
+pub const TECHNIQUES: [Technique; 6] = [
     Technique::ShadowMap,
     Technique::ShadowVolume,
     Technique::Psm,
     Technique::Tsm,
     Technique::Hybrid,
+    Technique::Subdivision,
 ];
 
 /// A configuration of the space: `base` with the values set; its label names the technique and

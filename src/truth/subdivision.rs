@@ -436,6 +436,22 @@ impl LightSubdivision {
         }
     }
 
+    /// The shadowed fragments of the surfaces `keep` accepts as triangles to draw (each
+    /// convex polygon a fan, in its triangle's winding), three corners each as homogeneous
+    /// f32 points (w = 1): what `technique = subdivision` marks into the stencil.
+    pub fn shadowed_triangles(&self, keep: impl Fn(u32) -> bool) -> Vec<[f32; 4]> {
+        let kept = || self.shadowed.iter().filter(|f| keep(f.surface));
+        let corners: usize = kept().map(|f| 3 * f.points.len().saturating_sub(2)).sum();
+        let mut out = Vec::with_capacity(corners);
+        let point = |p: DVec3| [p.x as f32, p.y as f32, p.z as f32, 1.0];
+        for f in kept() {
+            for i in 1..f.points.len().saturating_sub(1) {
+                out.extend([f.points[0], f.points[i], f.points[i + 1]].map(point));
+            }
+        }
+        out
+    }
+
     /// Whether surface point `p` with normal `n` lies on a shadowed fragment: a short probe
     /// through the surface along its normal, as long as the reference's ray lift either side.
     pub fn shadowed(&self, p: Vec3, n: Vec3) -> bool {
@@ -516,6 +532,16 @@ fn content_key(light: &Light, triangles: &[Triangle]) -> u64 {
         eat(((t.surface as u64) << 1) | t.casts as u64);
     }
     h
+}
+
+/// What light `index`'s subdivision of `scene` depends on, as the key its cache file is named
+/// by: equal keys, equal fragments.
+pub fn content_key_of(scene: &Scene, index: usize) -> Result<u64, SubdivisionError> {
+    let light = scene
+        .lights
+        .get(index)
+        .ok_or(SubdivisionError::NoSuchLight(index))?;
+    Ok(content_key(light, &triangles_in_range(scene, light)))
 }
 
 /// The cache file of light `index` of `scene`, named by map and light and keyed by content.

@@ -17,7 +17,7 @@ use std::sync::Arc;
 /// Frame times kept for the graph.
 pub const HISTORY: usize = 240;
 
-/// The technique keys' cycle: none, the three maps, volumes, the hybrid, auto.
+/// The technique keys' cycle: none, the three maps, volumes, the hybrid, the subdivision, auto.
 fn next_technique(t: Technique) -> Technique {
     match t {
         Technique::None => Technique::ShadowMap,
@@ -25,7 +25,8 @@ fn next_technique(t: Technique) -> Technique {
         Technique::Psm => Technique::Tsm,
         Technique::Tsm => Technique::ShadowVolume,
         Technique::ShadowVolume => Technique::Hybrid,
-        Technique::Hybrid => Technique::Auto,
+        Technique::Hybrid => Technique::Subdivision,
+        Technique::Subdivision => Technique::Auto,
         Technique::Auto => Technique::None,
     }
 }

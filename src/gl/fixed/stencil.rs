@@ -4,6 +4,7 @@
 //! fill variant's darkening through glRectf.
 
 use super::FixedFunction;
+use crate::gl::fragments::LightFragmentDraw;
 use crate::gl::legacy;
 use crate::gl::passes::PassContext;
 use crate::gl::passes::state::DrawState;
@@ -87,4 +88,31 @@ pub fn fill(gl: &glow::Context, ff: &FixedFunction, shade: f32) {
         gl.disable(glow::BLEND);
         gl.enable(glow::DEPTH_TEST);
     }
+}
+
+/// The subdivision's shadowed fragments marked into the stencil with legacy state (as
+/// [`stencil::mark_fragments`]): the camera's matrices on the stacks, vec4 corners through
+/// glVertexPointer.
+pub fn mark_fragments(ctx: &PassContext, ff: &FixedFunction, fragments: &LightFragmentDraw) {
+    let gl = ctx.gl;
+    stencil::mark_state(gl);
+    // SAFETY: fixed-function state of the current compatibility context.
+    unsafe {
+        gl.use_program(None);
+        ff.legacy
+            .load_matrix(legacy::PROJECTION, &ctx.plan.camera.projection);
+        let pull = stencil::towards_camera(ctx.plan.camera.position, stencil::FIXED_FRAGMENT_PULL);
+        ff.legacy
+            .load_matrix(legacy::MODELVIEW, &(ctx.plan.camera.view * pull));
+    }
+    ff.clip_planes(gl, None);
+    ff.bind_volumes(gl, fragments.vbo, fragments.ebo);
+    for m in fragments.marks.iter().filter(|m| m.count > 0) {
+        crate::gl::passes::apply_cull(gl, m.cull);
+        // SAFETY: the light's own buffer; the range lies inside it.
+        unsafe { gl.draw_arrays(glow::TRIANGLES, m.first, m.count) };
+    }
+    ff.unbind(gl);
+    ff.reset(gl);
+    stencil::end_marks(gl);
 }

@@ -14,6 +14,7 @@ use super::PassContext;
 use super::lit::{COUNT_BITS, MAP_DECIDES};
 use super::state::DrawState;
 use crate::gl::depth_bounds_ext::{self, DepthBoundsExt};
+use crate::gl::fragments::LightFragmentDraw;
 use crate::gl::program::{Program, has_clip_distances};
 use crate::gl::volumes::LightVolumes;
 use crate::options::{
@@ -350,5 +351,81 @@ pub fn fill(gl: &glow::Context, program: &Program, vao: glow::VertexArray, shade
         gl.stencil_op(glow::KEEP, glow::KEEP, glow::KEEP);
         gl.disable(glow::BLEND);
         gl.enable(glow::DEPTH_TEST);
+    }
+}
+
+/// glPolygonOffset (factor, units) the subdivision's fragments are marked with: units only.
+/// A slope factor pulls a wall seen edge-on past the floor it meets, a line of false shadow
+/// along every crease (docs/subdivision.md: oa_dm1 0.30% outside the band at (-1, -2)).
+pub const FRAGMENT_OFFSET: (f32, f32) = (0.0, -4.0);
+
+/// How far `shaders/fragments.vert` pulls each corner towards the camera, in f32 spacings of
+/// its coordinates: the rounding of the f64 corners is what the depth test must forgive, and
+/// near the camera the offset's units do not (docs/subdivision.md).
+pub const FRAGMENT_PULL_ULPS: f32 = 8.0;
+
+/// The fixed-function pipeline's pull (no vertex shader): every corner towards the camera by
+/// this fraction of its distance, through the modelview matrix.
+pub const FIXED_FRAGMENT_PULL: f32 = 1e-4;
+
+/// Vector's subdivision: clears the stencil and sets it to 1 where one of the light's shadowed
+/// fragments is the visible surface (drawn over the frame's depth, no colour or depth writes,
+/// each surface's fragments culled as the surface is); the lit pass then draws
+/// where it is 0, as after a volume pass.
+pub fn mark_fragments(ctx: &PassContext, program: &Program, fragments: &LightFragmentDraw) {
+    let gl = ctx.gl;
+    mark_state(gl);
+    program.bind(gl);
+    program_camera(ctx, program);
+    program.set_vec3(gl, "u_camera", ctx.plan.camera.position);
+    program.set_f32(gl, "u_pull_ulps", FRAGMENT_PULL_ULPS);
+    // SAFETY: the light's own vertex array; the ranges lie inside it.
+    unsafe {
+        gl.bind_vertex_array(Some(fragments.vao));
+        for m in fragments.marks.iter().filter(|m| m.count > 0) {
+            super::apply_cull(gl, m.cull);
+            gl.draw_arrays(glow::TRIANGLES, m.first, m.count);
+        }
+        gl.bind_vertex_array(None);
+    }
+    end_marks(gl);
+}
+
+/// A model matrix that moves every point towards `camera` by `pull` of its distance.
+pub fn towards_camera(camera: glam::Vec3, pull: f32) -> glam::Mat4 {
+    glam::Mat4::from_translation(camera)
+        * glam::Mat4::from_scale(glam::Vec3::splat(1.0 - pull))
+        * glam::Mat4::from_translation(-camera)
+}
+
+/// The state fragments are marked with (shader or fixed-function), the stencil cleared.
+pub fn mark_state(gl: &glow::Context) {
+    DrawState {
+        color_write: false,
+        depth_write: false,
+        depth_test: Some(glow::LEQUAL),
+        blend: None,
+        stencil_test: true,
+        polygon_offset: Some(FRAGMENT_OFFSET),
+    }
+    .apply(gl);
+    // SAFETY: fixed-function state and a clear of the bound target's stencil (within the
+    // light's scissor).
+    unsafe {
+        gl.stencil_mask(0xff);
+        gl.clear_stencil(0);
+        gl.clear(glow::STENCIL_BUFFER_BIT);
+        gl.stencil_func(glow::ALWAYS, 1, 0xff);
+        gl.stencil_op(glow::KEEP, glow::KEEP, glow::REPLACE);
+    }
+}
+
+/// Undoes [`mark_state`]'s stencil operation and offset.
+pub fn end_marks(gl: &glow::Context) {
+    // SAFETY: fixed-function state.
+    unsafe {
+        gl.stencil_op(glow::KEEP, glow::KEEP, glow::KEEP);
+        gl.disable(glow::POLYGON_OFFSET_FILL);
+        gl.color_mask(true, true, true, true);
     }
 }

@@ -365,7 +365,8 @@ pub fn shootout(lab: &mut Lab) -> Result<Section, ReproduceError> {
         "Forsyth's \"Shadow Shootout\" compares the methods by fill rate, geometry, aliasing, \
          self-shadowing and what they need from the scene. Each column here is measured on \
          the same frame: fill = milliseconds of the lit and stencil passes, geometry = the \
-         shadow maps' or volumes' drawing (and the volumes' side quads), aliasing = what the \
+         shadow maps' or volumes' drawing (and the volumes' side quads) or the subdivision \
+         made current (its key checked, rebuilt where the light's geometry moved), aliasing = what the \
          pixels within a pixel of a shadow edge add to the error, acne = false shadow, leaks \
          = false lit.",
     );
@@ -388,6 +389,7 @@ pub fn shootout(lab: &mut Lab) -> Result<Section, ReproduceError> {
             vec!["technique=shadow_map", "shadow_map.cull=back"],
         ),
         ("shadow volumes", vec!["technique=shadow_volume"]),
+        ("light-volume subdivision", vec!["technique=subdivision"]),
     ];
     if !lab.quick {
         configs.extend([
@@ -425,6 +427,7 @@ pub fn shootout(lab: &mut Lab) -> Result<Section, ReproduceError> {
             "lights.depth_copy",
             "lights.volume_build",
             "lights.volume_pieces",
+            "lights.subdivision",
         ]
         .iter()
         .map(|k| pass(k))
