@@ -569,6 +569,7 @@ pub fn subdivide_cached(
     let path = cache_path(dir, scene, index, content_key(light, &triangles));
     if let Ok(bytes) = std::fs::read(&path)
         && let Some(fragments) = decode(&bytes)
+        && fits(&fragments, scene.surfaces.len())
     {
         let (lit, shadowed) =
             fragments.iter().fold(
@@ -619,6 +620,14 @@ fn encode(fragments: &[Fragment]) -> Vec<u8> {
 }
 
 /// Reads what [`encode`] wrote; None for anything else (a stale or damaged file is rebuilt).
+/// Whether decoded fragments can be this scene's: each names one of its `surfaces` and has
+/// finite corners (a file that only looks whole is built again, not trusted).
+fn fits(fragments: &[Fragment], surfaces: usize) -> bool {
+    fragments
+        .iter()
+        .all(|f| (f.surface as usize) < surfaces && f.points.iter().all(|p| p.is_finite()))
+}
+
 fn decode(bytes: &[u8]) -> Option<Vec<Fragment>> {
     let mut at = 0usize;
     let mut take = |n: usize| -> Option<&[u8]> {
@@ -742,6 +751,11 @@ mod tests {
         let mut huge = bytes.clone();
         huge[8..16].copy_from_slice(&u64::MAX.to_le_bytes());
         assert!(decode(&huge).is_none());
+        // Whole, but not this scene's: a surface it lacks, a corner at infinity.
+        assert!(fits(&back, 8) && !fits(&back, 7));
+        let mut far = back.clone();
+        far[0].points[1].x = f64::INFINITY;
+        assert!(!fits(&far, 8));
     }
 
     #[test]
