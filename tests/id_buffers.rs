@@ -129,10 +129,11 @@ fn eight_bit_triangle_ids_collide() {
 
 /// Priority buffers under minification (`shadow_map.priority_mipmap`): a 2048² map seen in a
 /// 160×120 frame, so that a pixel covers many texels. The reference is what most of each
-/// pixel's area sees (the exact masks at 640×480, by majority over 4×4 blocks): one texel at
+/// pixel's area sees (the exact masks at 1280×960, by majority over 8×8 blocks): one texel at
 /// the pixel's centre says only what the centre sees. The chain must change nothing where the
-/// map is magnified and must be read where it is minified; whether it errs less than the
-/// unfiltered buffer is measured and printed (docs/id-buffers.md: it does not, here).
+/// map is magnified, and where shadows are finer than a pixel (hard case 14) it must err far
+/// less than the unfiltered buffer; on the cases with shadow edges only, both are printed
+/// (docs/id-buffers.md: there the chain errs a little more).
 #[test]
 fn mipmapped_priority_buffers_under_minification() {
     let priority = |size: &'static str, w: &'static str, h: &'static str, mipmap: bool| {
