@@ -1350,7 +1350,8 @@ mod tests {
                     "auto",
                     "psm",
                     "tsm",
-                    "hybrid"
+                    "hybrid",
+                    "subdivision"
                 ]
             }
         );

@@ -623,7 +623,8 @@ mod tests {
         s.options.technique = Technique::ShadowMap;
         s.cycle_light_technique(0);
         assert_eq!(s.options.lighting.techniques, "0:psm");
-        for _ in 0..5 {
+        // tsm, shadow_volume, hybrid, subdivision, auto, none.
+        for _ in 0..6 {
             s.cycle_light_technique(0);
         }
         assert_eq!(s.options.lighting.techniques, "0:none");
