@@ -1575,26 +1575,9 @@ impl<'a> FrameRun<'a> {
         }
         let wraps = o.shadow_volume.wrap == StencilWrap::Wrap
             || self.ctx.plan.stencil == StencilPasses::Separate;
-        let (w, h) = (self.target.width, self.target.height);
-        let fbo = self.target.fbo;
-        let read = || debug::read_stencil(gl, fbo, w, h);
-        go_on!(self.step(StepKind::Stencil, Some(lp), None, |_| {
-            debug::stencil_image(&read(), w, h, wraps)
-        }));
+        go_on!(self.stencil_step(StepKind::Stencil, lp, wraps));
         let stencil = self.requested_stencil(lp, wraps);
-        self.timer.begin(gl, PassId::light(lp.light, Stage::Lit));
-        let shadow = LitShadow::Stencil { test: !fill };
-        match self.fixed {
-            Some(ff) => fixed::lit::draw(&self.ctx, ff, lp, &shadow, &lp.receivers),
-            None => passes::lit::draw(
-                &self.ctx,
-                self.lit_program(LitVariant::plain(false)),
-                lp,
-                &shadow,
-                &lp.receivers,
-            ),
-        }
-        go_on!(self.step(StepKind::Lit, Some(lp), None, Self::color_image));
+        go_on!(self.lit_over_stencil(lp, !fill));
         if fill {
             self.timer.begin(gl, PassId::light(lp.light, Stage::Fill));
             match self.fixed {
@@ -1620,14 +1603,28 @@ impl<'a> FrameRun<'a> {
             Some(ff) => fixed::stencil::mark_fragments(&self.ctx, ff, f),
             None => passes::stencil::mark_fragments(&self.ctx, &self.programs.fragments, f),
         }
+        go_on!(self.stencil_step(StepKind::Fragments, lp, false));
+        let stencil = self.requested_stencil(lp, false);
+        go_on!(self.lit_over_stencil(lp, true));
+        Ok(ControlFlow::Continue(stencil))
+    }
+
+    /// A walkthrough step showing light `lp`'s stencil as it stands (`wraps`: counts wrapped).
+    fn stencil_step(&mut self, kind: StepKind, lp: &LightPlan, wraps: bool) -> Flow<()> {
+        let gl = self.ctx.gl;
         let (w, h) = (self.target.width, self.target.height);
         let fbo = self.target.fbo;
-        go_on!(self.step(StepKind::Fragments, Some(lp), None, |_| {
-            debug::stencil_image(&debug::read_stencil(gl, fbo, w, h), w, h, false)
-        }));
-        let stencil = self.requested_stencil(lp, false);
-        self.timer.begin(gl, PassId::light(lp.light, Stage::Lit));
-        let shadow = LitShadow::Stencil { test: true };
+        self.step(kind, Some(lp), None, |_| {
+            debug::stencil_image(&debug::read_stencil(gl, fbo, w, h), w, h, wraps)
+        })
+    }
+
+    /// Light `lp`'s lit pass over the stencil its volumes or fragments left (`test`: only
+    /// where it is zero; off, everywhere, for the fill variant).
+    fn lit_over_stencil(&mut self, lp: &LightPlan, test: bool) -> Flow<()> {
+        self.timer
+            .begin(self.ctx.gl, PassId::light(lp.light, Stage::Lit));
+        let shadow = LitShadow::Stencil { test };
         match self.fixed {
             Some(ff) => fixed::lit::draw(&self.ctx, ff, lp, &shadow, &lp.receivers),
             None => passes::lit::draw(
@@ -1638,8 +1635,7 @@ impl<'a> FrameRun<'a> {
                 &lp.receivers,
             ),
         }
-        go_on!(self.step(StepKind::Lit, Some(lp), None, Self::color_image));
-        Ok(ControlFlow::Continue(stencil))
+        self.step(StepKind::Lit, Some(lp), None, Self::color_image)
     }
 
     /// Volumes and silhouettes drawn over the finished frame, when asked for (untimed).
@@ -1720,23 +1716,11 @@ impl<'a> FrameRun<'a> {
                 }
                 None if let Some(f) = self.fragments_of(lp) => {
                     passes::stencil::mark_fragments(&self.ctx, &self.programs.fragments, &f);
-                    passes::lit::draw_mask(
-                        &self.ctx,
-                        self.lit_program(LitVariant::plain(true)),
-                        lp,
-                        &LitShadow::Stencil { test: true },
-                        &lp.receivers,
-                    );
+                    self.mask_over_stencil(lp);
                 }
                 Some(v) => {
                     passes::stencil::draw(&self.ctx, &self.programs.volume, &v, lp.scissor, false);
-                    passes::lit::draw_mask(
-                        &self.ctx,
-                        self.lit_program(LitVariant::plain(true)),
-                        lp,
-                        &LitShadow::Stencil { test: true },
-                        &lp.receivers,
-                    );
+                    self.mask_over_stencil(lp);
                 }
                 None => draw_maps(
                     &self.ctx,
@@ -1765,6 +1749,17 @@ impl<'a> FrameRun<'a> {
         }
         masks.sort_by_key(|m| m.light);
         (Some(gbuffer), masks, hybrid_stats)
+    }
+
+    /// Light `lp`'s mask where its stencil is zero, after its volumes or fragments.
+    fn mask_over_stencil(&self, lp: &LightPlan) {
+        passes::lit::draw_mask(
+            &self.ctx,
+            self.lit_program(LitVariant::plain(true)),
+            lp,
+            &LitShadow::Stencil { test: true },
+            &lp.receivers,
+        );
     }
 
     /// A hybrid light's mask, drawn as its frame drew it (mask, counts, the decision), with

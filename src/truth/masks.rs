@@ -109,6 +109,13 @@ pub fn majority(fine: &Mask, factor: u32) -> (Mask, Vec<bool>) {
     (mask, decided)
 }
 
+/// `rendered` against the [`majority`] of `fine` (the exact mask at `factor` times its size),
+/// the pixels whose block ties left out.
+pub fn compare_majority(rendered: &Mask, fine: &Mask, factor: u32) -> super::Counts {
+    let (reference, decided) = majority(fine, factor);
+    super::compare_where(rendered, &reference, |i| decided[i])
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

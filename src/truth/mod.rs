@@ -8,7 +8,7 @@ pub mod reference;
 pub mod sampled;
 pub mod subdivision;
 
-pub use masks::{Tracing, majority, reference_mask};
+pub use masks::{Tracing, compare_majority, majority, reference_mask};
 pub use measure::{ExactMasks, Measurement, exact_mask, measure, measure_with};
 pub use metrics::{Counts, Rates, compare, compare_where, error_image, error_image_all};
 pub use reference::{Blocker, Reference};

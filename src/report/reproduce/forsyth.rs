@@ -248,11 +248,7 @@ pub fn priority_mips(lab: &mut Lab) -> Result<Section, ReproduceError> {
         let c = lab.capture(&sets)?;
         let mut area = Counts::default();
         for (mask, exact) in c.frame.masks.iter().zip(&fine.exact) {
-            let (reference, decided) = crate::truth::majority(exact, factor);
-            let n = crate::truth::compare_where(mask, &reference, |i| decided[i]);
-            area.receiver_pixels += n.receiver_pixels;
-            area.false_shadow += n.false_shadow;
-            area.false_lit += n.false_lit;
+            area.add(&crate::truth::compare_majority(mask, exact, factor));
         }
         let e = area.rates().total;
         t.push(vec![name.to_string(), pct(e), pct(c.total.rates().total)]);
