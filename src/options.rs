@@ -388,6 +388,68 @@ impl Options {
     }
 }
 
+/// What `technique = auto` chooses for a light: a technique and, for standard maps, what they
+/// store. Written `shadow_map:id` in `auto_among`; a bare `shadow_map` stores what
+/// `shadow_map.buffer` says.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub struct Candidate {
+    pub technique: Technique,
+    /// Depth for every technique but `shadow_map` (see [`Options::map_buffer`]).
+    pub buffer: MapBuffer,
+}
+
+impl Candidate {
+    /// `technique` with the buffer `options` give it.
+    pub fn of(technique: Technique, options: &Options) -> Candidate {
+        Candidate {
+            technique,
+            buffer: options.map_buffer(technique),
+        }
+    }
+
+    /// One `auto_among` entry: `technique` or `shadow_map:buffer`, resolved under `options`.
+    fn parse(text: &str, options: &Options) -> Result<Candidate, String> {
+        let (technique, buffer) = match text.split_once(':') {
+            Some((t, b)) => (t, Some(b)),
+            None => (text, None),
+        };
+        let technique = Technique::parse_value(technique)?;
+        if matches!(technique, Technique::None | Technique::Auto) {
+            return Err(format!("`{technique}` is not a shadow technique"));
+        }
+        match buffer {
+            None => Ok(Candidate::of(technique, options)),
+            Some(b) if technique == Technique::ShadowMap => Ok(Candidate {
+                technique,
+                buffer: MapBuffer::parse_value(b)?,
+            }),
+            Some(_) => Err(format!(
+                "`{}`: only shadow_map takes a buffer (shadow_map:id)",
+                text.trim()
+            )),
+        }
+    }
+}
+
+/// A technique whose maps (if any) store depth.
+impl From<Technique> for Candidate {
+    fn from(technique: Technique) -> Candidate {
+        Candidate {
+            technique,
+            buffer: MapBuffer::Depth,
+        }
+    }
+}
+
+impl fmt::Display for Candidate {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self.buffer {
+            MapBuffer::Depth => write!(f, "{}", self.technique),
+            b => write!(f, "{}:{b}", self.technique),
+        }
+    }
+}
+
 impl Technique {
     /// Whether the technique draws shadow maps (its lit pass reads them).
     pub fn uses_maps(self) -> bool {
@@ -697,6 +759,16 @@ option_enum! {
 }
 
 option_enum! {
+    /// How `technique = subdivision` shadows with models (`subdivision.models`).
+    pub enum ModelShadows {
+        /// The world subdivided; models' shadows, and the world's on models, by volumes.
+        Volumes = "volumes",
+        /// Models subdivided with the world.
+        Subdivided = "subdivided",
+    }
+}
+
+option_enum! {
     /// What one ID of an ID or priority buffer stands for.
     pub enum IdUnit {
         /// A scene surface (a Quake 3 face, patch or model surface).
@@ -737,8 +809,10 @@ define_options! {
         /// The techniques `technique = auto` chooses among, comma separated (any of
         /// shadow_map, psm, tsm, shadow_volume, hybrid, subdivision; the subdivision's first
         /// frame builds it, its cost is the cheapest of its first frames, as for every
-        /// technique). Each one is measured twice before a
-        /// one-frame command's frame, so every addition costs learning frames.
+        /// technique). `shadow_map:B` is standard maps storing B (depth, id, priority,
+        /// priority_depth) whatever `shadow_map.buffer` says, so that `auto` chooses the
+        /// buffer too: `shadow_map,shadow_map:id,shadow_volume`. Each one is measured
+        /// before a one-frame command's frame, so every addition costs learning frames.
         auto_among: String = "shadow_map,shadow_volume".to_string();
     }
 
@@ -1087,6 +1161,17 @@ define_options! {
         gpu_extrusion: GpuExtrusion = GpuExtrusion::None;
     }
 
+    /// Vector's light-volume subdivision (`technique = subdivision`).
+    group subdivision: SubdivisionOptions {
+        /// Who casts the models' shadows and the world's shadows on models. `volumes`: the
+        /// world alone is subdivided, and models (which move) get shadow volumes counted into
+        /// the same stencil, with the world's pieces whose shadow reaches a model, so a
+        /// moving model costs volumes, not a new subdivision. `subdivided`: models are cut
+        /// with the world (Vector's method as written; a light is subdivided again whenever a
+        /// model in its range moves).
+        models: ModelShadows = ModelShadows::Volumes;
+    }
+
     /// The GL the frame runs on.
     group gl: GlOptions {
         /// `shaders`, or `fixed_function`: the paper's passes with the legacy calls themselves
@@ -1200,24 +1285,43 @@ impl Options {
             .collect()
     }
 
-    /// The techniques `auto` chooses among (`auto_among`); the default pair if it does not
-    /// parse (`validate` reports that).
-    pub fn auto_choices(&self) -> Vec<Technique> {
-        self.parse_auto_among()
-            .unwrap_or_else(|_| vec![Technique::ShadowMap, Technique::ShadowVolume])
+    /// What `auto` chooses among (`auto_among`); the default pair if it does not parse
+    /// (`validate` reports that).
+    pub fn auto_choices(&self) -> Vec<Candidate> {
+        self.parse_auto_among().unwrap_or_else(|_| {
+            [Technique::ShadowMap, Technique::ShadowVolume]
+                .map(|t| Candidate::of(t, self))
+                .to_vec()
+        })
     }
 
-    fn parse_auto_among(&self) -> Result<Vec<Technique>, OptionError> {
+    /// `auto_among` with every map buffer but depth replaced by depth (`shadow_map:depth`),
+    /// for a context that cannot draw them.
+    pub fn auto_among_depth_only(&self) -> String {
+        let mut out: Vec<String> = Vec::new();
+        for part in self.auto_among.split(',') {
+            let part = part.trim();
+            let entry = match Candidate::parse(part, self) {
+                Ok(c) if c.technique == Technique::ShadowMap && part.contains(':') => {
+                    "shadow_map:depth".to_string()
+                }
+                _ => part.to_string(),
+            };
+            if !out.contains(&entry) {
+                out.push(entry);
+            }
+        }
+        out.join(",")
+    }
+
+    fn parse_auto_among(&self) -> Result<Vec<Candidate>, OptionError> {
         let text = self.auto_among.trim();
         let bad = |reason: String| bad_value("auto_among", text, reason);
         let mut out = Vec::new();
         for part in text.split(',') {
-            let t = Technique::parse_value(part).map_err(bad)?;
-            if matches!(t, Technique::None | Technique::Auto) {
-                return Err(bad(format!("`{t}` is not a shadow technique")));
-            }
-            if !out.contains(&t) {
-                out.push(t);
+            let c = Candidate::parse(part, self).map_err(bad)?;
+            if !out.contains(&c) {
+                out.push(c);
             }
         }
         Ok(out)
@@ -1301,6 +1405,34 @@ mod tests {
         assert_eq!((o.width, o.height), (640, 480));
         // `render` and `view` shadow every light without options.
         assert_eq!(o.technique, Technique::Auto);
+    }
+
+    #[test]
+    fn auto_among_takes_a_map_buffer_for_standard_maps_only() {
+        let mut o = Options {
+            auto_among: "shadow_map, shadow_map:id,shadow_volume".into(),
+            ..Options::default()
+        };
+        let names: Vec<String> = o.auto_choices().iter().map(|c| c.to_string()).collect();
+        assert_eq!(names, ["shadow_map", "shadow_map:id", "shadow_volume"]);
+        // A bare `shadow_map` stores what `shadow_map.buffer` says: here the same as `:id`.
+        o.shadow_map.buffer = MapBuffer::Id;
+        assert_eq!(o.auto_choices().len(), 2);
+        for bad in [
+            "shadow_volume:id",
+            "shadow_map:nonsense",
+            "auto",
+            "shadow_map:",
+        ] {
+            let b = Options {
+                auto_among: bad.into(),
+                ..Options::default()
+            };
+            assert!(b.validate().is_err(), "{bad}");
+        }
+        // Where the context draws no ID buffers, they become depth maps.
+        o.auto_among = "shadow_map:priority,shadow_map:id,shadow_volume".into();
+        assert_eq!(o.auto_among_depth_only(), "shadow_map:depth,shadow_volume");
     }
 
     #[test]

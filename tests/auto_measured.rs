@@ -4,10 +4,10 @@
 
 mod common;
 
-use common::{gl_on, load_scene_file, options_with};
+use common::{gl_on, load_asset, load_scene_file, options_with};
 use shadowlab::frame::Frame;
 use shadowlab::gl::{FrameRequest, Renderer};
-use shadowlab::options::{BackendChoice, Options, Technique};
+use shadowlab::options::{BackendChoice, Candidate, MapBuffer, Options, Technique};
 use shadowlab::report::estimate::{learn_auto, sampled_frame};
 use shadowlab::scene::{Scene, path};
 use shadowlab::truth::{Counts, ExactMasks, Reference};
@@ -316,4 +316,58 @@ fn auto_leaves_a_technique_when_its_measured_error_rises() {
     let f = last.unwrap();
     let e = full_errors(&scene, &f)[&0].rates().total;
     assert!(e <= 0.01, "light 0 ends {:.3}% wrong", 100.0 * e);
+}
+
+/// `auto_among` naming a map buffer: on the grazing light without polygon offset, where depth
+/// maps get 46% of the receivers wrong (tests/id_buffers.rs), `auto` measures both buffers,
+/// shadows with the ID buffer, and the frame errs as an ID buffer does (under 0.1% there).
+#[test]
+fn auto_chooses_the_id_buffer_where_depth_maps_without_offset_fail() {
+    let _alone = alone();
+    let (scene, _, _) = load_asset("assets/hard/grazing.toml");
+    let o = options_with(
+        &[
+            AUTO,
+            &[
+                "auto_among=shadow_map,shadow_map:id",
+                "shadow_map.offset=false",
+            ],
+        ]
+        .concat(),
+    );
+    let reference = Reference::build(&scene);
+    let (_ctx, mut renderer) = gl_on(BackendChoice::Egl, &o);
+    let frame = learnt(&mut renderer, &scene, &o, &reference);
+    let id = Candidate {
+        technique: Technique::ShadowMap,
+        buffer: MapBuffer::Id,
+    };
+    let full = full_errors(&scene, &frame);
+    assert!(!full.is_empty(), "no light planned");
+    for (light, counts) in &full {
+        let memory = renderer.auto_memory();
+        let depth = memory.error(*light, Technique::ShadowMap, &o).unwrap();
+        let ids = memory.error(*light, id, &o).unwrap();
+        let e = counts.rates().total;
+        println!(
+            "light {light}: sampled depth {:.3}%, id {:.3}%; frame {:.3}% ({:?})",
+            100.0 * depth.value,
+            100.0 * ids.value,
+            100.0 * e,
+            frame.plan_stats.choices
+        );
+        // Both were measured, and the measurements tell them apart.
+        assert!(depth.low > 0.3, "depth without offset: {depth:?}");
+        assert!(ids.high < 0.01, "id: {ids:?}");
+        assert!(
+            frame
+                .plan_stats
+                .choices
+                .iter()
+                .any(|c| c.starts_with(&format!("light {light}: shadow_map:id "))),
+            "{:?}",
+            frame.plan_stats.choices
+        );
+        assert!(e < 0.001, "light {light}: {:.3}% wrong", 100.0 * e);
+    }
 }

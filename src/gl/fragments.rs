@@ -3,7 +3,7 @@
 
 use super::upload::{Buffers, buffer_data};
 use crate::scene::{Cull, Scene};
-use crate::truth::subdivision::{self, SubdivisionError, SubdivisionStats};
+use crate::truth::subdivision::{self, Geometry, SubdivisionError, SubdivisionStats};
 use glow::HasContext;
 use std::collections::HashMap;
 use std::time::Instant;
@@ -29,10 +29,10 @@ pub struct MarkRange {
 }
 
 /// What can change a light's subdivision without a new scene revision, cheap to hash: the
-/// light's position and range, each model's transform and pose. While it holds (and the
-/// geometry's revision) the content key, which hashes every triangle in range (96 ms a frame
-/// for oa_dm3's 64 lights), is not computed again.
-fn quick_key(scene: &Scene, light: usize) -> u64 {
+/// light's position and range, and when models are cut too each model's transform and pose.
+/// While it holds (and the geometry's revision) the content key, which hashes every triangle
+/// in range (96 ms a frame for oa_dm3's 64 lights), is not computed again.
+fn quick_key(scene: &Scene, light: usize, geometry: Geometry) -> u64 {
     use std::hash::{Hash, Hasher};
     let mut h = std::collections::hash_map::DefaultHasher::new();
     scene.revision().hash(&mut h);
@@ -41,7 +41,12 @@ fn quick_key(scene: &Scene, light: usize) -> u64 {
         c.to_bits().hash(&mut h);
     }
     l.radius.to_bits().hash(&mut h);
-    for m in &scene.models {
+    let models = match geometry {
+        Geometry::Everything => &scene.models[..],
+        Geometry::World => &[],
+    };
+    (geometry == Geometry::World).hash(&mut h);
+    for m in models {
         m.pose.hash(&mut h);
         for c in m.transform.to_cols_array() {
             c.to_bits().hash(&mut h);
@@ -104,14 +109,14 @@ pub struct FragmentBuffers {
 }
 
 impl FragmentBuffers {
-    /// Makes light `light`'s fragments those of `scene` as it stands: kept when the light and
-    /// the triangles in its range are unchanged, else read from the disk cache (when there is
-    /// one) or subdivided, and uploaded.
+    /// Makes light `light`'s fragments those of `scene`'s `geometry` as it stands: kept when
+    /// the light and the triangles in its range are unchanged, else read from the disk cache
+    /// (when there is one) or subdivided, and uploaded.
     pub fn update(
         &mut self,
         gl: &glow::Context,
         scene: &Scene,
-        light: usize,
+        (light, geometry): (usize, Geometry),
     ) -> Result<FragmentsUpdate, FragmentError> {
         let start = Instant::now();
         let kept = |f: &LightFragments| FragmentsUpdate {
@@ -119,11 +124,11 @@ impl FragmentBuffers {
             renewed: false,
             ms: start.elapsed().as_secs_f64() * 1e3,
         };
-        let quick = (light < scene.lights.len()).then(|| quick_key(scene, light));
+        let quick = (light < scene.lights.len()).then(|| quick_key(scene, light, geometry));
         if let Some(f) = self.lights.get(&light).filter(|f| Some(f.quick) == quick) {
             return Ok(kept(f));
         }
-        let key = subdivision::content_key_of(scene, light)?;
+        let key = subdivision::content_key_of(scene, light, geometry)?;
         let quick = quick.unwrap_or_default();
         if let Some(f) = self.lights.get_mut(&light).filter(|f| f.key == key) {
             // Something moved, but nothing in the light's range.
@@ -131,8 +136,8 @@ impl FragmentBuffers {
             return Ok(kept(f));
         }
         let sub = match subdivision::default_cache_dir() {
-            Some(dir) => subdivision::subdivide_cached(scene, light, &dir)?,
-            None => subdivision::subdivide(scene, light)?,
+            Some(dir) => subdivision::subdivide_cached(scene, light, geometry, &dir)?,
+            None => subdivision::subdivide_geometry(scene, light, geometry)?,
         };
         let mut corners = Vec::new();
         let mut marks = [Cull::Back, Cull::Front, Cull::None].map(|cull| MarkRange {

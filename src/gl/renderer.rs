@@ -42,6 +42,7 @@ use crate::plan::{LightPlan, Plan};
 use crate::plan::{fallback, fixed_function};
 use crate::scene::{Camera, Scene};
 use crate::shadow::views::ViewKind;
+use crate::truth::subdivision::Geometry;
 use glow::HasContext;
 use std::collections::HashMap;
 use std::ops::ControlFlow;
@@ -778,9 +779,17 @@ impl Renderer {
         let shadow_mapped = plan.any_maps();
         let hybrids = plan.any(Technique::Hybrid);
         let trapezoids = plan.any(Technique::Tsm);
-        let buffer = options.map_buffer(Technique::ShadowMap);
-        if buffer != MapBuffer::Depth && plan.any(Technique::ShadowMap) {
-            self.programs.depth_buffer(gl, buffer)?;
+        // The buffers other than depth some light's standard maps store (`auto` may choose
+        // one per light).
+        let mut buffers: Vec<MapBuffer> = Vec::new();
+        for lp in &plan.lights {
+            if lp.technique == Technique::ShadowMap
+                && lp.buffer != MapBuffer::Depth
+                && !buffers.contains(&lp.buffer)
+            {
+                self.programs.depth_buffer(gl, lp.buffer)?;
+                buffers.push(lp.buffer);
+            }
         }
         let mut variants = HashMap::new();
         for (shadow_map, cube, six, hybrid, warp_depth) in [
@@ -811,17 +820,13 @@ impl Renderer {
                     warp_depth,
                     buffer: MapBuffer::Depth,
                 };
-                let with_buffer = LitVariant { buffer, ..v };
-                let buffered = buffer != MapBuffer::Depth
-                    && shadow_map
-                    && !cube
-                    && !hybrid
-                    && !warp_depth
-                    && plan.any(Technique::ShadowMap);
-                for v in [Some(v), buffered.then_some(with_buffer)]
-                    .into_iter()
-                    .flatten()
-                {
+                // ID and priority buffers are read as 2D maps by standard maps only.
+                let buffered = shadow_map && !cube && !hybrid && !warp_depth;
+                let with_buffers = buffers
+                    .iter()
+                    .filter(|_| buffered)
+                    .map(|&buffer| LitVariant { buffer, ..v });
+                for v in std::iter::once(v).chain(with_buffers) {
                     let defines = lit_defines(options, v, request.overlays.texel_grid);
                     let key = self.programs.lit_variant(gl, &defines)?;
                     variants.insert(v, key);
@@ -1049,9 +1054,10 @@ impl<'a> FrameRun<'a> {
         let sm = &self.ctx.options.shadow_map;
         let mut maps: Vec<ViewMap> = Vec::new();
         let mut kinds: Vec<MapKey> = Vec::new();
-        let any_ids = plan.lights.iter().any(|lp| {
-            lp.technique.uses_maps() && self.ctx.options.map_buffer(lp.technique) == MapBuffer::Id
-        });
+        let any_ids = plan
+            .lights
+            .iter()
+            .any(|lp| lp.technique.uses_maps() && lp.buffer == MapBuffer::Id);
         let fbo = if plan.any_maps() && (!self.copy || any_ids) {
             Some(self.shadow_maps.fbo(gl).map_err(RenderError::Gl)?)
         } else {
@@ -1061,7 +1067,7 @@ impl<'a> FrameRun<'a> {
             if !lp.technique.uses_maps() {
                 continue;
             }
-            let buffer = self.ctx.options.map_buffer(lp.technique);
+            let buffer = lp.buffer;
             let (table, table_changed) = self
                 .id_tables
                 .table(
@@ -1315,7 +1321,7 @@ impl<'a> FrameRun<'a> {
         }
         let prepare_start = Instant::now();
         let mut builds_ms = 0.0;
-        for lp in plan.lights.iter().filter(|l| l.technique.uses_volumes()) {
+        for lp in plan.lights.iter().filter(|l| l.counts_volumes()) {
             let v = self
                 .planner
                 .volume_draws(self.ctx.scene, plan, lp, self.ctx.options)?;
@@ -1384,7 +1390,10 @@ impl<'a> FrameRun<'a> {
             if lp.technique != Technique::Subdivision {
                 continue;
             }
-            let update = self.fragments.update(gl, self.ctx.scene, lp.light)?;
+            let geometry = lp.subdivided.unwrap_or(Geometry::Everything);
+            let update = self
+                .fragments
+                .update(gl, self.ctx.scene, (lp.light, geometry))?;
             self.timer
                 .record_cpu(PassId::light(lp.light, Stage::Subdivision), update.ms);
             self.cache.subdivisions_renewed += usize::from(update.renewed);
@@ -1405,7 +1414,7 @@ impl<'a> FrameRun<'a> {
 
     /// The light's volume draws with their buffers, when it has volumes this frame.
     fn volumes_of(&self, lp: &LightPlan) -> Option<LightVolumes<'_>> {
-        if !lp.technique.uses_volumes() {
+        if !lp.counts_volumes() {
             return None;
         }
         let draws = self.planner.last_volume_draws(lp.light)?;
@@ -1455,12 +1464,12 @@ impl<'a> FrameRun<'a> {
                 if let Some(image) = go_on!(self.hybrid_light(pi, maps)) {
                     stencil_image = Some(image);
                 }
-            } else if self.volumes_of(lp).is_some() {
-                if let Some(image) = go_on!(self.volume_light(lp)) {
-                    stencil_image = Some(image);
-                }
             } else if let Some(f) = self.fragments_of(lp) {
                 if let Some(image) = go_on!(self.subdivision_light(lp, &f)) {
+                    stencil_image = Some(image);
+                }
+            } else if self.volumes_of(lp).is_some() {
+                if let Some(image) = go_on!(self.volume_light(lp)) {
                     stencil_image = Some(image);
                 }
             } else {
@@ -1565,16 +1574,8 @@ impl<'a> FrameRun<'a> {
         let fill = o.shadow_volume.shading == VolumeShading::Fill;
         self.timer
             .begin(gl, PassId::light(lp.light, Stage::Stencil));
-        if let Some(v) = self.volumes_of(lp) {
-            match self.fixed {
-                Some(ff) => fixed::stencil::draw(&self.ctx, ff, &v, lp.scissor),
-                None => {
-                    passes::stencil::draw(&self.ctx, &self.programs.volume, &v, lp.scissor, false)
-                }
-            }
-        }
-        let wraps = o.shadow_volume.wrap == StencilWrap::Wrap
-            || self.ctx.plan.stencil == StencilPasses::Separate;
+        self.count_volumes(lp);
+        let wraps = self.counts_wrap();
         go_on!(self.stencil_step(StepKind::Stencil, lp, wraps));
         let stencil = self.requested_stencil(lp, wraps);
         go_on!(self.lit_over_stencil(lp, !fill));
@@ -1589,8 +1590,9 @@ impl<'a> FrameRun<'a> {
         Ok(ControlFlow::Continue(stencil))
     }
 
-    /// A subdivided light: its shadowed fragments marked into the stencil, its lit pass where
-    /// none is. Returns its stencil when the request asks for it.
+    /// A subdivided light: its models' volumes counted (`subdivision.models = volumes`), its
+    /// shadowed fragments marked into the same stencil, its lit pass where the stencil is
+    /// zero. Returns its stencil when the request asks for it.
     fn subdivision_light(
         &mut self,
         lp: &LightPlan,
@@ -1599,14 +1601,42 @@ impl<'a> FrameRun<'a> {
         let gl = self.ctx.gl;
         self.timer
             .begin(gl, PassId::light(lp.light, Stage::Stencil));
-        match self.fixed {
-            Some(ff) => fixed::stencil::mark_fragments(&self.ctx, ff, f),
-            None => passes::stencil::mark_fragments(&self.ctx, &self.programs.fragments, f),
+        let counted = self.count_volumes(lp);
+        let wraps = counted && self.counts_wrap();
+        if counted {
+            go_on!(self.stencil_step(StepKind::Stencil, lp, wraps));
         }
-        go_on!(self.stencil_step(StepKind::Fragments, lp, false));
-        let stencil = self.requested_stencil(lp, false);
+        match self.fixed {
+            Some(ff) => fixed::stencil::mark_fragments(&self.ctx, ff, f, !counted),
+            None => {
+                let program = &self.programs.fragments;
+                passes::stencil::mark_fragments(&self.ctx, program, f, !counted)
+            }
+        }
+        go_on!(self.stencil_step(StepKind::Fragments, lp, wraps));
+        let stencil = self.requested_stencil(lp, wraps);
         go_on!(self.lit_over_stencil(lp, true));
         Ok(ControlFlow::Continue(stencil))
+    }
+
+    /// Whether volume counts wrap rather than saturate.
+    fn counts_wrap(&self) -> bool {
+        self.ctx.options.shadow_volume.wrap == StencilWrap::Wrap
+            || self.ctx.plan.stencil == StencilPasses::Separate
+    }
+
+    /// The light's volumes counted into the cleared stencil (a subdivided light's: its
+    /// models', and the world's on models); false when it has none this frame (the stencil is
+    /// left as it was).
+    fn count_volumes(&self, lp: &LightPlan) -> bool {
+        let Some(v) = self.volumes_of(lp) else {
+            return false;
+        };
+        match self.fixed {
+            Some(ff) => fixed::stencil::draw(&self.ctx, ff, &v, lp.scissor),
+            None => passes::stencil::draw(&self.ctx, &self.programs.volume, &v, lp.scissor, false),
+        }
+        true
     }
 
     /// A walkthrough step showing light `lp`'s stencil as it stands (`wraps`: counts wrapped).
@@ -1714,8 +1744,10 @@ impl<'a> FrameRun<'a> {
                     });
                     continue;
                 }
-                None if let Some(f) = self.fragments_of(lp) => {
-                    passes::stencil::mark_fragments(&self.ctx, &self.programs.fragments, &f);
+                _ if let Some(f) = self.fragments_of(lp) => {
+                    let counted = self.count_volumes(lp);
+                    let program = &self.programs.fragments;
+                    passes::stencil::mark_fragments(&self.ctx, program, &f, !counted);
                     self.mask_over_stencil(lp);
                 }
                 Some(v) => {
@@ -1818,12 +1850,13 @@ impl FrameRun<'_> {
     ) {
         let shadow = LitShadow::Stencil { test: true };
         match self.volumes_of(lp) {
-            Some(v) => {
-                fixed::stencil::draw(&self.ctx, ff, &v, lp.scissor);
+            _ if let Some(f) = self.fragments_of(lp) => {
+                let counted = self.count_volumes(lp);
+                fixed::stencil::mark_fragments(&self.ctx, ff, &f, !counted);
                 fixed::lit::draw_mask(&self.ctx, ff, lp, &shadow, &lp.receivers);
             }
-            None if let Some(f) = self.fragments_of(lp) => {
-                fixed::stencil::mark_fragments(&self.ctx, ff, &f);
+            Some(v) => {
+                fixed::stencil::draw(&self.ctx, ff, &v, lp.scissor);
                 fixed::lit::draw_mask(&self.ctx, ff, lp, &shadow, &lp.receivers);
             }
             None => fixed_maps(&self.ctx, ff, lp, bindings, true),
@@ -1904,7 +1937,7 @@ fn draw_maps<'p>(
             hybrid,
             warp_depth: shadow_map && lp.technique == Technique::Tsm,
             buffer: if shadow_map {
-                ctx.options.map_buffer(lp.technique)
+                lp.buffer
             } else {
                 MapBuffer::Depth
             },

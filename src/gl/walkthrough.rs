@@ -4,8 +4,8 @@
 
 use crate::frame::{Frame, Step, StepKind};
 use crate::options::{
-    CasterFaces, CompareResult, CountingMode, DepthSource, Options, StencilWrap, VolumeProjection,
-    VolumeShading,
+    CasterFaces, CompareResult, CountingMode, DepthSource, ModelShadows, Options, StencilWrap,
+    VolumeProjection, VolumeShading,
 };
 
 /// What a frame executed, as far as the explanations need it.
@@ -149,15 +149,29 @@ pub fn explain(step: &Step, options: &Options, executed: Executed) -> Explanatio
         },
         StepKind::Fragments => Explanation {
             title: format!("Shadowed fragments into the stencil ({who})"),
-            what: "Vector's light-volume subdivision cut the light's receivers, once and in \
-                   object space, into lit and shadowed fragments (each caster's light volume \
-                   clipping what lies behind it). The shadowed fragments are drawn over the \
-                   unlit pass's depth without colour or depth writes: where one is the visible \
-                   surface the stencil becomes 1 (bright). Nothing is counted and no volume \
-                   reaches the camera: the camera moves for free."
-                .into(),
+            what: format!(
+                "Vector's light-volume subdivision cut the light's receivers, once and in \
+                 object space, into lit and shadowed fragments (each caster's light volume \
+                 clipping what lies behind it). The shadowed fragments are drawn over the \
+                 unlit pass's depth without colour or depth writes: where one is the visible \
+                 surface the stencil becomes 1 (bright). {}",
+                match options.subdivision.models {
+                    ModelShadows::Volumes => {
+                        "Only the world was cut: the models, which move, had their shadow \
+                         volumes (and those of the world's pieces whose shadow may reach a \
+                         model) counted into the stencil just before; a mark replaces a count, \
+                         shadowed either way. A moving model costs volumes, not a new \
+                         subdivision, and the camera moves for free."
+                    }
+                    ModelShadows::Subdivided => {
+                        "Nothing is counted and no volume reaches the camera: the camera moves \
+                         for free (a moving model makes the light be cut again)."
+                    }
+                }
+            ),
             gl_state: format!(
-                "glClear(GL_STENCIL_BUFFER_BIT); glColorMask(0,0,0,0); glDepthMask(0); \
+                "glClear(GL_STENCIL_BUFFER_BIT) unless volumes were counted; \
+                 glColorMask(0,0,0,0); glDepthMask(0); \
                  glDepthFunc(GL_LEQUAL); glPolygonOffset({}, {}) (the fragments' corners were \
                  rounded from f64); glStencilFunc(GL_ALWAYS, 1, ~0), glStencilOp(KEEP, KEEP, \
                  REPLACE); each surface's fragments culled as its material is.",

@@ -7,14 +7,16 @@ use super::scissor::{self, Scissor};
 use super::{CameraSetup, LightPlan, PartTriangles, Plan, PlanStats, VolumePart, cull};
 use crate::geometry::{Aabb, Frustum};
 use crate::options::{
-    CountingMode, GpuExtrusion, OmniMode, Options, Outside, Pipeline, ShadowMapOptions,
-    ShadowVolumeOptions, StencilPasses, Technique, VolumeCasters, VolumeProjection, Warp,
+    Candidate, CountingMode, GpuExtrusion, MapBuffer, ModelShadows, OmniMode, Options, Outside,
+    Pipeline, ShadowMapOptions, ShadowVolumeOptions, StencilPasses, Technique, VolumeCasters,
+    VolumeProjection, Warp,
 };
 use crate::scene::{Camera, Light, LightKind, Scene, SurfaceOwner};
 use crate::shadow::frusta;
 use crate::shadow::views::{Rect, ViewKind, shadow_views};
 use crate::shadow::volume::{self, CasterGroup, CasterGroups, Counting, PieceRef};
 use crate::shadow::warp::{self, WarpInput};
+use crate::truth::subdivision::Geometry;
 use glam::{Mat4, Vec3};
 
 /// How far (in the face's image plane) a receiver may reach past a kept frustum's rectangle:
@@ -375,10 +377,11 @@ impl<'a> FrameFacts<'a> {
     /// Light `index`'s work this frame, or None when it is culled.
     fn plan_light(&self, index: usize, order: usize, stats: &mut PlanStats) -> Option<LightPlan> {
         let (receivers, scissor) = self.cull_light(index, stats)?;
-        let (technique, reason) = self.technique_of(index, stats);
+        let (chosen, reason) = self.technique_of(index, stats);
         let mut plan = LightPlan {
             light: index,
-            technique,
+            technique: chosen.technique,
+            buffer: chosen.buffer,
             order,
             views: Vec::new(),
             volumes: Vec::new(),
@@ -391,11 +394,12 @@ impl<'a> FrameFacts<'a> {
             scissor,
             view_scissors: Vec::new(),
             merged: false,
+            subdivided: None,
             volume_receivers: Vec::new(),
             near_plane_triangles: Vec::new(),
             reason,
         };
-        let left_without = match technique {
+        let left_without = match chosen.technique {
             Technique::ShadowMap | Technique::Psm | Technique::Tsm => {
                 self.plan_maps(&mut plan, stats)
             }
@@ -405,11 +409,16 @@ impl<'a> FrameFacts<'a> {
                 .plan_maps(&mut plan, stats)
                 .or_else(|| self.plan_volumes(&mut plan, stats)),
             // Its fragments are the renderer's, per light, built where the light's
-            // geometry changed: the plan only says which lights and receivers.
-            Technique::Subdivision | Technique::None | Technique::Auto => None,
+            // geometry changed: the plan says which geometry, and the models' volumes.
+            Technique::Subdivision => {
+                self.plan_subdivision(&mut plan, stats);
+                None
+            }
+            Technique::None | Technique::Auto => None,
         };
         if let Some(why) = left_without {
             plan.technique = Technique::None;
+            plan.buffer = MapBuffer::Depth;
             plan.reason = why.into();
         }
         if plan.technique == Technique::None && !plan.reason.is_empty() {
@@ -475,8 +484,9 @@ impl<'a> FrameFacts<'a> {
         }
     }
 
-    /// The technique light `index` runs with: asked for, or chosen by `auto` (and why).
-    fn technique_of(&self, index: usize, stats: &mut PlanStats) -> (Technique, String) {
+    /// The technique (and map buffer) light `index` runs with: asked for, or chosen by `auto`
+    /// (and why).
+    fn technique_of(&self, index: usize, stats: &mut PlanStats) -> (Candidate, String) {
         match self.options.technique_for(index) {
             Technique::Auto => {
                 let l = &self.scene.lights[index];
@@ -487,10 +497,10 @@ impl<'a> FrameFacts<'a> {
                 let c = auto::choose(index, self.options, self.memory, alpha_casters);
                 stats
                     .choices
-                    .push(format!("light {index}: {} ({})", c.technique, c.reason));
-                (c.technique, c.reason)
+                    .push(format!("light {index}: {} ({})", c.candidate, c.reason));
+                (c.candidate, c.reason)
             }
-            t => (t, String::new()),
+            t => (Candidate::of(t, self.options), String::new()),
         }
     }
 }
@@ -515,13 +525,20 @@ impl FrameFacts<'_> {
             l
         };
         // Warped maps are 2D: six spots, never a cube.
-        let six_spots;
+        let (six_spots, chosen_buffer);
         let map_options = if plan.technique.warp().is_some() {
             six_spots = ShadowMapOptions {
                 omni: OmniMode::SixSpots,
                 ..self.options.shadow_map.clone()
             };
             &six_spots
+        } else if plan.buffer != self.map_options.buffer {
+            // `auto` chose this light's buffer (`shadow_map:id` in `auto_among`).
+            chosen_buffer = ShadowMapOptions {
+                buffer: plan.buffer,
+                ..self.map_options.clone()
+            };
+            &chosen_buffer
         } else {
             &self.map_options
         };
@@ -548,6 +565,7 @@ impl FrameFacts<'_> {
         .unwrap_or_else(|| shadow_views(view_light, &self.caster_bounds, map_options));
         let light_key = hash_of((
             &self.map_options_text,
+            plan.buffer,
             plan.order,
             mat_bits(&Mat4::from_translation(l.position)),
             l.radius.to_bits(),
@@ -805,9 +823,49 @@ impl FrameFacts<'_> {
     /// A shadow-volume light's parts: each piece whose shadow may reach a receiver in view,
     /// with its counting. Some(why) when none is left.
     fn plan_volumes(&self, plan: &mut LightPlan, stats: &mut PlanStats) -> Option<&'static str> {
+        let receiver_boxes = self.volume_parts(plan, stats, false);
+        let p = &self.options.plan;
+        if self.on() && p.cull_casters {
+            plan.volume_receivers = receiver_boxes;
+        }
+        if self.on() && p.cull_lights && plan.volumes.is_empty() {
+            return Some("no caster whose shadow reaches the view");
+        }
+        self.hand_to_gpu(plan);
+        None
+    }
+
+    /// A subdivided light: which triangles are cut and, when the models are not among them
+    /// (`subdivision.models = volumes`), the volumes of the models and of the world's pieces
+    /// whose shadow may fall on a model (the world's shadows on the world are the marks').
+    fn plan_subdivision(&self, plan: &mut LightPlan, stats: &mut PlanStats) {
+        let geometry = match self.options.subdivision.models {
+            ModelShadows::Volumes => Geometry::World,
+            ModelShadows::Subdivided => Geometry::Everything,
+        };
+        plan.subdivided = Some(geometry);
+        if geometry == Geometry::World {
+            let receiver_boxes = self.volume_parts(plan, stats, true);
+            if self.on() && self.options.plan.cull_casters {
+                plan.volume_receivers = receiver_boxes;
+            }
+            self.hand_to_gpu(plan);
+        }
+    }
+
+    /// Pushes the light's volume parts to `plan.volumes`: the pieces whose shadow may meet a
+    /// receiver in view; with `world_on_models`, the world's pieces only where it may meet a
+    /// model. Returns the receivers' boxes.
+    fn volume_parts(
+        &self,
+        plan: &mut LightPlan,
+        stats: &mut PlanStats,
+        world_on_models: bool,
+    ) -> Vec<Aabb> {
         let p = &self.options.plan;
         let on = self.on();
         let l = &self.scene.lights[plan.light];
+        let is_model = |owner| matches!(owner, SurfaceOwner::Model(_));
         // Receiver boxes: a piece whose shadow meets none of them shadows nothing in view
         // (Forsyth).
         let receiver_boxes: Vec<Aabb> = plan
@@ -815,12 +873,28 @@ impl FrameFacts<'_> {
             .iter()
             .map(|&r| self.scene.surfaces[r as usize].bounds)
             .collect();
+        let model_boxes: Vec<Aabb> = plan
+            .receivers
+            .iter()
+            .map(|&r| &self.scene.surfaces[r as usize])
+            .filter(|s| world_on_models && is_model(s.owner))
+            .map(|s| s.bounds)
+            .collect();
         for &(group, piece, bounds, g) in &self.pieces {
-            let keep = !(on && p.cull_casters) || {
-                let shadow = cull::shadow_bounds(&bounds, l.position, l.radius);
-                cull::sphere_meets_aabb(l.position, l.radius, &bounds)
-                    && self.view_frustum.intersects_aabb(&shadow)
-                    && receiver_boxes.iter().any(|r| r.intersects(&shadow))
+            let world_for_models = world_on_models && !is_model(g.owner);
+            let boxes = match world_for_models {
+                true => &model_boxes,
+                false => &receiver_boxes,
+            };
+            let keep = match on && p.cull_casters {
+                // Unculled, every piece; the world's only when some model may be shadowed.
+                false => !(world_for_models && model_boxes.is_empty()),
+                true => {
+                    let shadow = cull::shadow_bounds(&bounds, l.position, l.radius);
+                    cull::sphere_meets_aabb(l.position, l.radius, &bounds)
+                        && self.view_frustum.intersects_aabb(&shadow)
+                        && boxes.iter().any(|r| r.intersects(&shadow))
+                }
             };
             if !keep {
                 stats.casters_culled += 1;
@@ -853,14 +927,7 @@ impl FrameFacts<'_> {
                 }
             }
         }
-        if on && p.cull_casters {
-            plan.volume_receivers = receiver_boxes;
-        }
-        if on && p.cull_lights && plan.volumes.is_empty() {
-            return Some("no caster whose shadow reaches the view");
-        }
-        self.hand_to_gpu(plan);
-        None
+        receiver_boxes
     }
 
     /// Moves the parts of groups the GPU extrudes (`shadow_volume.gpu_extrusion`) out of the

@@ -94,6 +94,10 @@ pub fn resolve(options: &Options, has: impl Fn(&str) -> bool) -> (Options, Vec<F
     if !has("primitive_id") && o.shadow_map.buffer != crate::options::MapBuffer::Depth {
         fall("primitive_id", "shadow_map.buffer", &mut o, "depth");
     }
+    let depth_only = o.auto_among_depth_only();
+    if !has("primitive_id") && depth_only != o.auto_among {
+        fall("primitive_id", "auto_among", &mut o, &depth_only);
+    }
     if !has("float_depth") && o.shadow_map.depth_bits == DepthBits::D32f {
         fall("float_depth", "shadow_map.depth_bits", &mut o, "24");
     }

@@ -58,6 +58,10 @@ pub fn resolve(options: &Options) -> (Options, Vec<Fallback>) {
     if o.shadow_map.buffer != crate::options::MapBuffer::Depth {
         replace("shadow_map.buffer", &mut o, "depth");
     }
+    let depth_only = o.auto_among_depth_only();
+    if depth_only != o.auto_among {
+        replace("auto_among", &mut o, &depth_only);
+    }
     if o.shadow_volume.stencil == StencilPasses::Separate {
         replace("shadow_volume.stencil", &mut o, "two_pass");
     }

@@ -18,11 +18,14 @@ pub mod scissor;
 pub mod volume_draws;
 
 use crate::geometry::{Aabb, projection};
-use crate::options::{Options, StencilPasses, Technique, VolumeProjection};
+use crate::options::{
+    MapBuffer, ModelShadows, Options, StencilPasses, Technique, VolumeProjection,
+};
 use crate::scene::vis::VisStats;
 use crate::scene::{Camera, Scene};
 use crate::shadow::views::ShadowView;
 use crate::shadow::volume::{CasterGroups, Counting, PieceRef};
+use crate::truth::subdivision::Geometry;
 use auto::AutoMemory;
 use glam::{Mat3, Mat4, Vec3};
 
@@ -123,6 +126,9 @@ pub struct LightPlan {
     pub light: usize,
     /// The technique it runs with (resolved: never `auto`; `none` when it needs no shadow work).
     pub technique: Technique,
+    /// What its maps store: `shadow_map.buffer` for standard maps unless `auto` chose
+    /// otherwise (`shadow_map:id` in `auto_among`); depth for every other technique.
+    pub buffer: MapBuffer,
     /// Position among this frame's enabled lights: the paper grows the polygon offset with it.
     pub order: usize,
     /// Shadow-map views (shadow mapping only).
@@ -151,6 +157,9 @@ pub struct LightPlan {
     /// `shadow_map.omni = frusta`: the frusta of the views and what they were chosen for (the
     /// light's position, radius and map options), for [`kept_frusta::KeptFrusta`].
     pub frusta: Option<(u64, Vec<crate::shadow::frusta::FaceFrustum>)>,
+    /// The subdivision (`technique = subdivision`): which triangles it cuts; with
+    /// [`Geometry::World`] the models' shadows, and the world's on models, are `volumes`.
+    pub subdivided: Option<Geometry>,
     /// Shadow volumes: the boxes of the receivers whose counts matter; a facing triangle whose
     /// shadow reaches none of them is left out of its volume (empty: every triangle counts).
     pub volume_receivers: Vec<Aabb>,
@@ -159,6 +168,16 @@ pub struct LightPlan {
     pub near_plane_triangles: Vec<Vec<u32>>,
     /// How the technique was chosen (`auto`, or why the light needs no shadow work).
     pub reason: String,
+}
+
+impl LightPlan {
+    /// Whether the light counts shadow volumes into its stencil: its technique's, or a
+    /// subdivided light's for its models.
+    pub fn counts_volumes(&self) -> bool {
+        self.technique.uses_volumes()
+            || (self.technique == Technique::Subdivision
+                && !(self.volumes.is_empty() && self.extruded.is_empty()))
+    }
 }
 
 /// What the plan decided, for stats overlays and bench JSON.
@@ -250,7 +269,7 @@ impl Plan {
 
     /// Whether some planned light counts shadow volumes.
     pub fn any_volumes(&self) -> bool {
-        self.lights.iter().any(|l| l.technique.uses_volumes())
+        self.lights.iter().any(LightPlan::counts_volumes)
     }
 
     /// The plan for the scene's own camera.
@@ -272,10 +291,13 @@ impl Plan {
     }
 
     /// Whether planning a frame of `scene` under `options` needs its caster groups: some
-    /// light may use shadow volumes.
+    /// light may use shadow volumes (a subdivided one for its models').
     pub fn needs_casters(scene: &Scene, options: &Options) -> bool {
+        let models_by_volumes = options.subdivision.models == ModelShadows::Volumes;
         options.uses_where(scene.lights.len(), |t| {
-            t.uses_volumes() || t == Technique::Auto
+            t.uses_volumes()
+                || t == Technique::Auto
+                || (t == Technique::Subdivision && models_by_volumes)
         })
     }
 }

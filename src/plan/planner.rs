@@ -13,7 +13,7 @@ use super::occlusion::DepthPyramid;
 use super::pass::PassTime;
 use super::volume_draws::{LightVolumeDraws, PieceChoices, VolumeDrawError, VolumePlanner};
 use super::{CameraSetup, LightPlan};
-use crate::options::{Options, Technique};
+use crate::options::{Candidate, Options};
 use crate::scene::{Camera, Scene};
 use crate::shadow::volume::CasterGroups;
 use crate::truth::sampled::LightSample;
@@ -66,8 +66,8 @@ pub struct Planner {
     memory: AutoMemory,
     /// Frusta of static omni lights kept across frames (`plan.keep_frusta`).
     kept_frusta: KeptFrusta,
-    /// Each planned light and the technique it ran with in the last frame.
-    ran: Vec<(usize, Technique)>,
+    /// Each planned light and the technique (and buffer) it ran with in the last frame.
+    ran: Vec<(usize, Candidate)>,
     /// The scene's caster groups and the revision they were built from.
     casters: Option<(u64, Arc<CasterGroups>)>,
     volumes: VolumePlanner,
@@ -94,7 +94,17 @@ impl Planner {
 
     /// Learns from a frame's pass times, for `technique = auto`.
     pub fn record_costs(&mut self, plan: &Plan, passes: &[PassTime]) {
-        self.ran = plan.lights.iter().map(|l| (l.light, l.technique)).collect();
+        self.ran = plan
+            .lights
+            .iter()
+            .map(|l| {
+                let candidate = Candidate {
+                    technique: l.technique,
+                    buffer: l.buffer,
+                };
+                (l.light, candidate)
+            })
+            .collect();
         self.memory.record(passes, &self.ran);
     }
 
@@ -158,7 +168,7 @@ impl Planner {
         options: &Options,
         float_depth: bool,
     ) -> DepthNeed {
-        let any_volumes = plan.lights.iter().any(|l| l.technique.uses_volumes());
+        let any_volumes = plan.any_volumes();
         let reads_depth = options.plan.occlusion || options.plan.depth_clip;
         self.depth.usable = false;
         self.depth.pending = None;

@@ -28,7 +28,7 @@
 //! #                                             (or radius = 40 instead of centre),
 //! # route = [[0, 0, 100], [200, 0, 100]]  speed = 100   # or along a closed route,
 //! # flicker = { amount = 0.4, rate = 6 }                 # or in place, its brightness varying
-//! [[model]]
+//! [[model]]                       # needs [map], or base = "empty" (read from the default data)
 //! player = "sarge"                # or md3 = "models/..."; skin = "default"; frame = 0
 //! position = [0, 0, 24]
 //! yaw = 90
@@ -465,9 +465,19 @@ impl SceneFile {
         let start = Instant::now();
         let mut report = LoadReport::default();
         let mut scene = match &self.map {
-            None => match self.base {
+            None if self.model.is_empty() => match self.base {
                 Base::Builtin => builtin::default_scene(),
                 Base::Empty => Scene::named("empty"),
+            },
+            None => match self.base {
+                // The built-in room's materials are not the model loader's.
+                Base::Builtin => {
+                    return Err(self.invalid(
+                        "[[model]] needs a [map] or base = \"empty\" (the built-in room takes \
+                         no models)",
+                    ));
+                }
+                Base::Empty => self.build_models_alone(options, &mut report)?,
             },
             Some(map) => self.build_map(map, options, &mut report)?,
         };
@@ -515,18 +525,27 @@ impl SceneFile {
             self.add_model(&mut builder, &vfs, i, m)?;
         }
         let (mut scene, missing) = builder.finish(&vfs, options.q3.progress);
-        if !missing.is_empty() {
-            let names: Vec<&str> = missing.iter().map(|(n, _)| n.as_str()).collect();
-            let w = format!(
-                "{} textures missing, drawn as a magenta checker: {}",
-                missing.len(),
-                names.join(", ")
-            );
-            log::warn!("{w}");
-            report.warnings.push(w);
-        }
+        warn_of_missing_textures(&missing, report);
         scene.camera = self.spawn_camera(&info.spawns)?;
         report.counts = Some(info.counts);
+        Ok(scene)
+    }
+
+    /// An empty scene with the `[[model]]`s, read from the default data set (no `[map]` names
+    /// another).
+    fn build_models_alone(
+        &self,
+        options: &Options,
+        report: &mut LoadReport,
+    ) -> Result<Scene, SceneFileError> {
+        let vfs = Vfs::open_data_dir(&pk3::data_dir())?;
+        let shaders = load_shader_library(&vfs, &mut report.warnings);
+        let mut builder = SceneBuilder::new("empty", &shaders);
+        for (i, m) in self.model.iter().enumerate() {
+            self.add_model(&mut builder, &vfs, i, m)?;
+        }
+        let (scene, missing) = builder.finish(&vfs, options.q3.progress);
+        warn_of_missing_textures(&missing, report);
         Ok(scene)
     }
 
@@ -758,6 +777,21 @@ fn warn_of_lights_in_solid(scene: &Scene, report: &mut LoadReport) {
 }
 
 /// Every `scripts/*.shader` of the data set, in name order; warnings are collected.
+/// A warning naming the textures a scene lacks (`(name, why)` each).
+fn warn_of_missing_textures(missing: &[(String, String)], report: &mut LoadReport) {
+    if missing.is_empty() {
+        return;
+    }
+    let names: Vec<&str> = missing.iter().map(|(n, _)| n.as_str()).collect();
+    let w = format!(
+        "{} textures missing, drawn as a magenta checker: {}",
+        missing.len(),
+        names.join(", ")
+    );
+    log::warn!("{w}");
+    report.warnings.push(w);
+}
+
 pub fn load_shader_library(vfs: &Vfs, warnings: &mut Vec<String>) -> ShaderLibrary {
     let mut lib = ShaderLibrary::new();
     for name in vfs.list("scripts/", ".shader") {
@@ -773,4 +807,17 @@ pub fn load_shader_library(vfs: &Vfs, warnings: &mut Vec<String>) -> ShaderLibra
         log::debug!("{n} shader script problems skipped");
     }
     lib
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_model_on_the_built_in_room_is_refused_not_dropped() {
+        let text = "[[model]]\nplayer = \"sarge\"\nposition = [0, 0, 24]\nyaw = 0\n";
+        let file = SceneFile::parse(text, Path::new("room.toml")).unwrap();
+        let e = file.build(&Options::default()).unwrap_err().to_string();
+        assert!(e.contains("needs a [map] or base = \"empty\""), "{e}");
+    }
 }

@@ -16,7 +16,7 @@
 //! `Reference::build_with(scene, false)`.
 
 use crate::images::{GBuffer, Mask};
-use crate::scene::{Light, Scene};
+use crate::scene::{Light, Scene, SurfaceOwner};
 use bvh::aabb::{Aabb, Bounded};
 use bvh::bounding_hierarchy::BHShape;
 use bvh::bvh::Bvh;
@@ -270,15 +270,26 @@ fn clip(
     still_lit
 }
 
+/// Which of the scene's triangles a subdivision cuts and casts with.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Geometry {
+    /// Every visible triangle: the exact reference.
+    Everything,
+    /// The world's (BSP and scene-file meshes), not the models': what stays still, so that a
+    /// moving model does not make it again (`subdivision.models = volumes`).
+    World,
+}
+
 /// The scene's triangles in world space within `light`'s range: receivers are visible
 /// surfaces, casters those that also cast.
-fn triangles_in_range(scene: &Scene, light: &Light) -> Vec<Triangle> {
+fn triangles_in_range(scene: &Scene, light: &Light, geometry: Geometry) -> Vec<Triangle> {
     let centre = light.position.as_dvec3();
     let radius = light.radius as f64;
     let mut out = Vec::new();
     for (surface, s) in scene.surfaces.iter().enumerate() {
         let m = &scene.materials[s.material];
-        if !m.visible {
+        let model = matches!(s.owner, SurfaceOwner::Model(_));
+        if !m.visible || (model && geometry == Geometry::World) {
             continue;
         }
         let transform = scene.surface_transform(s).as_dmat4();
@@ -324,11 +335,20 @@ struct Cut {
 
 /// Subdivides every receiver in `light`'s range by the volumes of the casters in range.
 pub fn subdivide(scene: &Scene, index: usize) -> Result<LightSubdivision, SubdivisionError> {
+    subdivide_geometry(scene, index, Geometry::Everything)
+}
+
+/// [`subdivide`] over `geometry`'s triangles only.
+pub fn subdivide_geometry(
+    scene: &Scene,
+    index: usize,
+    geometry: Geometry,
+) -> Result<LightSubdivision, SubdivisionError> {
     let light = scene
         .lights
         .get(index)
         .ok_or(SubdivisionError::NoSuchLight(index))?;
-    subdivide_triangles(index, light, triangles_in_range(scene, light))
+    subdivide_triangles(index, light, triangles_in_range(scene, light, geometry))
 }
 
 /// [`subdivide`] over `triangles`, those in `light`'s range.
@@ -534,14 +554,21 @@ fn content_key(light: &Light, triangles: &[Triangle]) -> u64 {
     h
 }
 
-/// What light `index`'s subdivision of `scene` depends on, as the key its cache file is named
-/// by: equal keys, equal fragments.
-pub fn content_key_of(scene: &Scene, index: usize) -> Result<u64, SubdivisionError> {
+/// What light `index`'s subdivision of `scene`'s `geometry` depends on, as the key its cache
+/// file is named by: equal keys, equal fragments.
+pub fn content_key_of(
+    scene: &Scene,
+    index: usize,
+    geometry: Geometry,
+) -> Result<u64, SubdivisionError> {
     let light = scene
         .lights
         .get(index)
         .ok_or(SubdivisionError::NoSuchLight(index))?;
-    Ok(content_key(light, &triangles_in_range(scene, light)))
+    Ok(content_key(
+        light,
+        &triangles_in_range(scene, light, geometry),
+    ))
 }
 
 /// The cache file of light `index` of `scene`, named by map and light and keyed by content.
@@ -554,18 +581,19 @@ fn cache_path(dir: &Path, scene: &Scene, index: usize, key: u64) -> PathBuf {
     dir.join(format!("{map}-light{index}-{key:016x}.bin"))
 }
 
-/// [`subdivide`], read from `dir` when it holds this light's subdivision of the same
-/// geometry, else built and written there.
+/// [`subdivide_geometry`], read from `dir` when it holds this light's subdivision of the same
+/// triangles, else built and written there.
 pub fn subdivide_cached(
     scene: &Scene,
     index: usize,
+    geometry: Geometry,
     dir: &Path,
 ) -> Result<LightSubdivision, SubdivisionError> {
     let light = scene
         .lights
         .get(index)
         .ok_or(SubdivisionError::NoSuchLight(index))?;
-    let triangles = triangles_in_range(scene, light);
+    let triangles = triangles_in_range(scene, light, geometry);
     let path = cache_path(dir, scene, index, content_key(light, &triangles));
     if let Ok(bytes) = std::fs::read(&path)
         && let Some(fragments) = decode(&bytes)

@@ -92,10 +92,15 @@ pub fn fill(gl: &glow::Context, ff: &FixedFunction, shade: f32) {
 
 /// The subdivision's shadowed fragments marked into the stencil with legacy state (as
 /// [`stencil::mark_fragments`]): the camera's matrices on the stacks, vec4 corners through
-/// glVertexPointer.
-pub fn mark_fragments(ctx: &PassContext, ff: &FixedFunction, fragments: &LightFragmentDraw) {
+/// glVertexPointer. `clear`: the stencil first (else it holds the models' volume counts).
+pub fn mark_fragments(
+    ctx: &PassContext,
+    ff: &FixedFunction,
+    fragments: &LightFragmentDraw,
+    clear: bool,
+) {
     let gl = ctx.gl;
-    stencil::mark_state(gl);
+    stencil::mark_state(gl, clear);
     // SAFETY: fixed-function state of the current compatibility context.
     unsafe {
         gl.use_program(None);

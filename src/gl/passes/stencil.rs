@@ -368,13 +368,18 @@ pub const FRAGMENT_PULL_ULPS: f32 = 8.0;
 /// this fraction of its distance, through the modelview matrix.
 pub const FIXED_FRAGMENT_PULL: f32 = 1e-4;
 
-/// Vector's subdivision: clears the stencil and sets it to 1 where one of the light's shadowed
-/// fragments is the visible surface (drawn over the frame's depth, no colour or depth writes,
-/// each surface's fragments culled as the surface is); the lit pass then draws
-/// where it is 0, as after a volume pass.
-pub fn mark_fragments(ctx: &PassContext, program: &Program, fragments: &LightFragmentDraw) {
+/// Vector's subdivision: clears the stencil (with `clear`; else it holds the models' volume
+/// counts) and sets it to 1 where one of the light's shadowed fragments is the visible surface
+/// (drawn over the frame's depth, no colour or depth writes, each surface's fragments culled
+/// as the surface is); the lit pass then draws where it is 0, as after a volume pass.
+pub fn mark_fragments(
+    ctx: &PassContext,
+    program: &Program,
+    fragments: &LightFragmentDraw,
+    clear: bool,
+) {
     let gl = ctx.gl;
-    mark_state(gl);
+    mark_state(gl, clear);
     program.bind(gl);
     program_camera(ctx, program);
     program.set_vec3(gl, "u_camera", ctx.plan.camera.position);
@@ -398,8 +403,9 @@ pub fn towards_camera(camera: glam::Vec3, pull: f32) -> glam::Mat4 {
         * glam::Mat4::from_translation(-camera)
 }
 
-/// The state fragments are marked with (shader or fixed-function), the stencil cleared.
-pub fn mark_state(gl: &glow::Context) {
+/// The state fragments are marked with (shader or fixed-function), the stencil cleared with
+/// `clear`. A mark replaces a volume count: shadowed either way.
+pub fn mark_state(gl: &glow::Context, clear: bool) {
     DrawState {
         color_write: false,
         depth_write: false,
@@ -413,8 +419,10 @@ pub fn mark_state(gl: &glow::Context) {
     // light's scissor).
     unsafe {
         gl.stencil_mask(0xff);
-        gl.clear_stencil(0);
-        gl.clear(glow::STENCIL_BUFFER_BIT);
+        if clear {
+            gl.clear_stencil(0);
+            gl.clear(glow::STENCIL_BUFFER_BIT);
+        }
         gl.stencil_func(glow::ALWAYS, 1, 0xff);
         gl.stencil_op(glow::KEEP, glow::KEEP, glow::REPLACE);
     }
