@@ -12,7 +12,7 @@ use shadowlab::images::MaskValue;
 use shadowlab::scene::Scene;
 use shadowlab::scene::builtin;
 use shadowlab::truth::metrics::near_boundary;
-use shadowlab::truth::subdivision::{self, Geometry, subdivision_mask};
+use shadowlab::truth::subdivision::{self, CacheWrite, Geometry, subdivision_mask};
 use shadowlab::truth::{Counts, Reference, Tracing, compare, reference_mask};
 
 /// One light's comparison: the counts, and the pixels outside the band where the two
@@ -165,15 +165,19 @@ fn the_cache_answers_as_the_build_did() {
     let scene = builtin::default_scene();
     let dir = std::env::temp_dir().join(format!("shadowlab-subdivision-{}", std::process::id()));
     let _ = std::fs::remove_dir_all(&dir);
-    let built = subdivision::subdivide_cached(&scene, 0, Geometry::Everything, &dir).unwrap();
-    let read = subdivision::subdivide_cached(&scene, 0, Geometry::Everything, &dir).unwrap();
+    let built =
+        subdivision::subdivide_cached(&scene, 0, Geometry::Everything, (&dir, CacheWrite::Write))
+            .unwrap();
+    let read =
+        subdivision::subdivide_cached(&scene, 0, Geometry::Everything, (&dir, CacheWrite::Write))
+            .unwrap();
     assert!(!built.stats.cached && read.stats.cached);
     assert_eq!(built.fragments, read.fragments);
     // Moving the light is another key: built again.
     let mut moved = scene.clone();
     moved.lights[0].position.x += 1.0;
     assert!(
-        !subdivision::subdivide_cached(&moved, 0, Geometry::Everything, &dir)
+        !subdivision::subdivide_cached(&moved, 0, Geometry::Everything, (&dir, CacheWrite::Write))
             .unwrap()
             .stats
             .cached

@@ -5,7 +5,9 @@
 
 use super::{CommonArgs, load};
 use anyhow::{Context, Result};
-use shadowlab::truth::subdivision::{self, Geometry, default_cache_dir, subdivision_mask};
+use shadowlab::truth::subdivision::{
+    self, CacheWrite, Geometry, default_cache_dir, subdivision_mask,
+};
 use shadowlab::truth::{Reference, Tracing, compare, reference_mask};
 use std::path::PathBuf;
 use std::time::Instant;
@@ -61,7 +63,12 @@ pub fn run(common: &CommonArgs, args: &Args) -> Result<()> {
     );
     for (l, light) in scene.lights.iter().enumerate() {
         let start = Instant::now();
-        let sub = subdivision::subdivide_cached(&scene, l, Geometry::Everything, &dir)?;
+        let sub = subdivision::subdivide_cached(
+            &scene,
+            l,
+            Geometry::Everything,
+            (&dir, CacheWrite::Write),
+        )?;
         let s = sub.stats;
         let how = if s.cached {
             format!("read in {:.1} ms", start.elapsed().as_secs_f64() * 1e3)

@@ -3,7 +3,7 @@
 
 use super::upload::{Buffers, buffer_data};
 use crate::scene::{Cull, Scene};
-use crate::truth::subdivision::{self, Geometry, SubdivisionError, SubdivisionStats};
+use crate::truth::subdivision::{self, CacheWrite, Geometry, SubdivisionError, SubdivisionStats};
 use glow::HasContext;
 use std::collections::HashMap;
 use std::time::Instant;
@@ -135,8 +135,14 @@ impl FragmentBuffers {
             f.quick = quick;
             return Ok(kept(f));
         }
+        // A light built before with other triangles moved, or something in its range did: its
+        // new pose is read if some run wrote it, not written (one file per frame otherwise).
+        let write = match self.lights.contains_key(&light) {
+            true => CacheWrite::ReadOnly,
+            false => CacheWrite::Write,
+        };
         let sub = match subdivision::default_cache_dir() {
-            Some(dir) => subdivision::subdivide_cached(scene, light, geometry, &dir)?,
+            Some(dir) => subdivision::subdivide_cached(scene, light, geometry, (&dir, write))?,
             None => subdivision::subdivide_geometry(scene, light, geometry)?,
         };
         let mut corners = Vec::new();

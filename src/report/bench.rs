@@ -383,6 +383,9 @@ pub struct Redone {
     pub extrusions_uploaded: f64,
     /// Share of frames that took the planner's depth from the frame before.
     pub depth_reused: f64,
+    /// Lights subdivided again or read from the disk cache (`technique = subdivision`: the
+    /// light or the triangles it cuts moved).
+    pub subdivisions_renewed: f64,
 }
 
 impl Redone {
@@ -396,6 +399,7 @@ impl Redone {
         self.models_uploaded += c.models_uploaded as f64;
         self.extrusions_uploaded += c.extrusions_uploaded as f64;
         self.depth_reused += f64::from(u8::from(c.depth_reused));
+        self.subdivisions_renewed += c.subdivisions_renewed as f64;
     }
 
     /// Sums as per-frame means.
@@ -410,6 +414,7 @@ impl Redone {
             &mut self.models_uploaded,
             &mut self.extrusions_uploaded,
             &mut self.depth_reused,
+            &mut self.subdivisions_renewed,
         ] {
             *v /= n;
         }

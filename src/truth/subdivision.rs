@@ -581,13 +581,29 @@ fn cache_path(dir: &Path, scene: &Scene, index: usize, key: u64) -> PathBuf {
     dir.join(format!("{map}-light{index}-{key:016x}.bin"))
 }
 
+/// Most bytes the cache directory holds: after a write, the files read or written longest ago
+/// go first. Each pose of a moving light or model is a file of its own (oa_dm1: about 4 MB a
+/// light), so without a bound benchmarks along moving paths filled 15 GB.
+pub const CACHE_BUDGET_BYTES: u64 = 2 << 30;
+
+/// Whether [`subdivide_cached`] writes what it builds.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum CacheWrite {
+    /// Written, for the next run (a static light).
+    Write,
+    /// Only read (a light that moved: its next pose needs a new file, and this one would be
+    /// read again only if the motion came back to it).
+    ReadOnly,
+}
+
 /// [`subdivide_geometry`], read from `dir` when it holds this light's subdivision of the same
-/// triangles, else built and written there.
+/// triangles, else built (and with [`CacheWrite::Write`] written there, the directory then
+/// kept within [`CACHE_BUDGET_BYTES`]).
 pub fn subdivide_cached(
     scene: &Scene,
     index: usize,
     geometry: Geometry,
-    dir: &Path,
+    (dir, write): (&Path, CacheWrite),
 ) -> Result<LightSubdivision, SubdivisionError> {
     let light = scene
         .lights
@@ -612,9 +628,16 @@ pub fn subdivide_cached(
             cached: true,
             ..SubdivisionStats::default()
         };
+        // Read now: the last file the budget evicts (a failure only makes it older).
+        if let Ok(f) = std::fs::File::options().append(true).open(&path) {
+            let _ = f.set_modified(std::time::SystemTime::now());
+        }
         return Ok(LightSubdivision::new(index, stats, fragments));
     }
     let sub = subdivide_triangles(index, light, triangles)?;
+    if write == CacheWrite::ReadOnly {
+        return Ok(sub);
+    }
     let io = |source| SubdivisionError::Cache {
         path: path.clone(),
         source,
@@ -624,7 +647,34 @@ pub fn subdivide_cached(
     let partial = path.with_extension("partial");
     std::fs::write(&partial, encode(&sub.fragments)).map_err(io)?;
     std::fs::rename(&partial, &path).map_err(io)?;
+    prune(dir, &path, CACHE_BUDGET_BYTES).map_err(io)?;
     Ok(sub)
+}
+
+/// Deletes the cache files of `dir` read or written longest ago until the rest hold at most
+/// `budget` bytes; `keep`, just written, stays.
+fn prune(dir: &Path, keep: &Path, budget: u64) -> std::io::Result<()> {
+    let mut files = Vec::new();
+    for entry in std::fs::read_dir(dir)? {
+        let entry = entry?;
+        let path = entry.path();
+        let meta = entry.metadata()?;
+        if meta.is_file() && path.extension().is_some_and(|x| x == "bin") {
+            files.push((meta.modified()?, meta.len(), path));
+        }
+    }
+    let mut total: u64 = files.iter().map(|f| f.1).sum();
+    files.sort();
+    for (_, size, path) in files {
+        if total <= budget {
+            break;
+        }
+        if path != keep {
+            std::fs::remove_file(&path)?;
+            total -= size;
+        }
+    }
+    Ok(())
 }
 
 const MAGIC: &[u8; 4] = b"SLSD";
@@ -700,6 +750,29 @@ fn decode(bytes: &[u8]) -> Option<Vec<Fragment>> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn the_cache_keeps_within_its_budget_dropping_the_oldest_first() {
+        let dir = std::env::temp_dir().join(format!("shadowlab-prune-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let start = std::time::SystemTime::now() - Duration::from_secs(1000);
+        let mut paths = Vec::new();
+        for i in 0..5u64 {
+            let p = dir.join(format!("map-light{i}-0.bin"));
+            std::fs::write(&p, vec![0u8; 100]).unwrap();
+            let f = std::fs::File::options().append(true).open(&p).unwrap();
+            f.set_modified(start + Duration::from_secs(10 * i)).unwrap();
+            paths.push(p);
+        }
+        // Another kind of file is not the cache's to delete.
+        std::fs::write(dir.join("notes.txt"), vec![0u8; 1000]).unwrap();
+        // The oldest is the one just written: it stays, the next oldest go.
+        prune(&dir, &paths[0], 250).unwrap();
+        let left: Vec<bool> = paths.iter().map(|p| p.exists()).collect();
+        assert_eq!(left, [true, false, false, false, true]);
+        assert!(dir.join("notes.txt").exists());
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
 
     fn quad(z: f64, half: f64) -> Vec<DVec3> {
         vec![

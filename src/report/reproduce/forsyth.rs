@@ -7,7 +7,7 @@ use super::lab::{Lab, pct};
 use super::{ReproduceError, Section};
 use crate::report::bench::BenchRow;
 use crate::report::table::{Align, Table};
-use crate::truth::subdivision::{self, Geometry, subdivision_mask};
+use crate::truth::subdivision::{self, CacheWrite, Geometry, subdivision_mask};
 use crate::truth::{Counts, Reference, Tracing, compare, reference_mask};
 use std::time::Instant;
 
@@ -508,11 +508,21 @@ pub fn subdivision(lab: &mut Lab) -> Result<Section, ReproduceError> {
     let mut total = Counts::default();
     let mut build_ms = 0.0;
     for (l, light) in scene.lights.iter().enumerate() {
-        let built = subdivision::subdivide_cached(scene, l, Geometry::Everything, &cache)
-            .map_err(|e| ReproduceError::Plot(e.to_string()))?;
+        let built = subdivision::subdivide_cached(
+            scene,
+            l,
+            Geometry::Everything,
+            (&cache, CacheWrite::Write),
+        )
+        .map_err(|e| ReproduceError::Plot(e.to_string()))?;
         let start = Instant::now();
-        let read = subdivision::subdivide_cached(scene, l, Geometry::Everything, &cache)
-            .map_err(|e| ReproduceError::Plot(e.to_string()))?;
+        let read = subdivision::subdivide_cached(
+            scene,
+            l,
+            Geometry::Everything,
+            (&cache, CacheWrite::Write),
+        )
+        .map_err(|e| ReproduceError::Plot(e.to_string()))?;
         let read_ms = start.elapsed().as_secs_f64() * 1e3;
         let mask = subdivision_mask(&read, g, light);
         let exact = reference_mask(&reference, g, light, l, Tracing::Bvh);
