@@ -232,9 +232,11 @@ fn auto_on_oa_dm1_takes_the_cheaper_technique_that_meets_the_target_and_holds_it
         if meets(other) {
             assert!(
                 cost(other) >= 0.75 * cost(*t) - 0.5,
-                "light {light}: {other} at {:.2} ms meets 1% too and is cheaper than {t} at {:.2} ms",
+                "light {light}: {other} at {:.2} ms meets 1% too and is cheaper than {t} at {:.2} \
+                 ms ({:?})",
                 cost(other),
-                cost(*t)
+                cost(*t),
+                frame.plan_stats.choices
             );
         }
     }
