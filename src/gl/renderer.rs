@@ -1606,13 +1606,7 @@ impl<'a> FrameRun<'a> {
         if counted {
             go_on!(self.stencil_step(StepKind::Stencil, lp, wraps));
         }
-        match self.fixed {
-            Some(ff) => fixed::stencil::mark_fragments(&self.ctx, ff, f, !counted),
-            None => {
-                let program = &self.programs.fragments;
-                passes::stencil::mark_fragments(&self.ctx, program, f, !counted)
-            }
-        }
+        self.mark_fragments(f, !counted);
         go_on!(self.stencil_step(StepKind::Fragments, lp, wraps));
         let stencil = self.requested_stencil(lp, wraps);
         go_on!(self.lit_over_stencil(lp, true));
@@ -1637,6 +1631,22 @@ impl<'a> FrameRun<'a> {
             None => passes::stencil::draw(&self.ctx, &self.programs.volume, &v, lp.scissor, false),
         }
         true
+    }
+
+    /// A subdivided light's shadowed fragments marked into the stencil (cleared first with
+    /// `clear`; else over the counts of its volumes).
+    fn mark_fragments(&self, f: &LightFragmentDraw, clear: bool) {
+        match self.fixed {
+            Some(ff) => fixed::stencil::mark_fragments(&self.ctx, ff, f, clear),
+            None => passes::stencil::mark_fragments(&self.ctx, &self.programs.fragments, f, clear),
+        }
+    }
+
+    /// A subdivided light's whole stencil, as its frame leaves it: its volumes counted, then
+    /// its fragments marked over them.
+    fn subdivision_stencil(&self, lp: &LightPlan, f: &LightFragmentDraw) {
+        let counted = self.count_volumes(lp);
+        self.mark_fragments(f, !counted);
     }
 
     /// A walkthrough step showing light `lp`'s stencil as it stands (`wraps`: counts wrapped).
@@ -1745,13 +1755,11 @@ impl<'a> FrameRun<'a> {
                     continue;
                 }
                 _ if let Some(f) = self.fragments_of(lp) => {
-                    let counted = self.count_volumes(lp);
-                    let program = &self.programs.fragments;
-                    passes::stencil::mark_fragments(&self.ctx, program, &f, !counted);
+                    self.subdivision_stencil(lp, &f);
                     self.mask_over_stencil(lp);
                 }
-                Some(v) => {
-                    passes::stencil::draw(&self.ctx, &self.programs.volume, &v, lp.scissor, false);
+                Some(_) => {
+                    self.count_volumes(lp);
                     self.mask_over_stencil(lp);
                 }
                 None => draw_maps(
@@ -1851,12 +1859,11 @@ impl FrameRun<'_> {
         let shadow = LitShadow::Stencil { test: true };
         match self.volumes_of(lp) {
             _ if let Some(f) = self.fragments_of(lp) => {
-                let counted = self.count_volumes(lp);
-                fixed::stencil::mark_fragments(&self.ctx, ff, &f, !counted);
+                self.subdivision_stencil(lp, &f);
                 fixed::lit::draw_mask(&self.ctx, ff, lp, &shadow, &lp.receivers);
             }
-            Some(v) => {
-                fixed::stencil::draw(&self.ctx, ff, &v, lp.scissor);
+            Some(_) => {
+                self.count_volumes(lp);
                 fixed::lit::draw_mask(&self.ctx, ff, lp, &shadow, &lp.receivers);
             }
             None => fixed_maps(&self.ctx, ff, lp, bindings, true),

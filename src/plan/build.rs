@@ -823,12 +823,8 @@ impl FrameFacts<'_> {
     /// A shadow-volume light's parts: each piece whose shadow may reach a receiver in view,
     /// with its counting. Some(why) when none is left.
     fn plan_volumes(&self, plan: &mut LightPlan, stats: &mut PlanStats) -> Option<&'static str> {
-        let receiver_boxes = self.volume_parts(plan, stats, false);
-        let p = &self.options.plan;
-        if self.on() && p.cull_casters {
-            plan.volume_receivers = receiver_boxes;
-        }
-        if self.on() && p.cull_lights && plan.volumes.is_empty() {
+        self.volume_parts(plan, stats, false);
+        if self.on() && self.options.plan.cull_lights && plan.volumes.is_empty() {
             return Some("no caster whose shadow reaches the view");
         }
         self.hand_to_gpu(plan);
@@ -845,23 +841,15 @@ impl FrameFacts<'_> {
         };
         plan.subdivided = Some(geometry);
         if geometry == Geometry::World {
-            let receiver_boxes = self.volume_parts(plan, stats, true);
-            if self.on() && self.options.plan.cull_casters {
-                plan.volume_receivers = receiver_boxes;
-            }
+            self.volume_parts(plan, stats, true);
             self.hand_to_gpu(plan);
         }
     }
 
     /// Pushes the light's volume parts to `plan.volumes`: the pieces whose shadow may meet a
     /// receiver in view; with `world_on_models`, the world's pieces only where it may meet a
-    /// model. Returns the receivers' boxes.
-    fn volume_parts(
-        &self,
-        plan: &mut LightPlan,
-        stats: &mut PlanStats,
-        world_on_models: bool,
-    ) -> Vec<Aabb> {
+    /// model. Culling casters, the receivers' boxes become `plan.volume_receivers`.
+    fn volume_parts(&self, plan: &mut LightPlan, stats: &mut PlanStats, world_on_models: bool) {
         let p = &self.options.plan;
         let on = self.on();
         let l = &self.scene.lights[plan.light];
@@ -927,7 +915,9 @@ impl FrameFacts<'_> {
                 }
             }
         }
-        receiver_boxes
+        if on && p.cull_casters {
+            plan.volume_receivers = receiver_boxes;
+        }
     }
 
     /// Moves the parts of groups the GPU extrudes (`shadow_volume.gpu_extrusion`) out of the
