@@ -21,6 +21,23 @@ uniform float u_cos_inner;    // where the cone edge starts to soften
 uniform float u_radius;
 
 #ifdef SHADOW_MAP
+#ifdef TEXGEN_FRAGMENT
+// The texgen planes relative to the light (shadow_map.texgen = fragment), applied here to the
+// interpolated position: no projective coordinates are interpolated, whose rounding differs
+// between rasterisers.
+#ifdef SIX_SPOTS
+uniform mat4 u_texgens[6];
+#else
+uniform mat4 u_texgen;
+#endif
+#ifdef WARP_DEPTH
+#ifdef SIX_SPOTS
+uniform mat4 u_texgen_depths[6];
+#else
+uniform mat4 u_texgen_depth;
+#endif
+#endif
+#else
 #ifdef SIX_SPOTS
 in vec4 v_shadows[6];
 #else
@@ -31,6 +48,7 @@ in vec4 v_shadow;
 in vec2 v_shadow_refs[6];
 #else
 in vec2 v_shadow_ref;
+#endif
 #endif
 #endif
 #ifdef BUFFER_PRIORITY_DEPTH
@@ -77,18 +95,38 @@ bool alpha_test(int func, float a, float ref) {
 #endif
 
 #if defined(SHADOW_MAP) && !defined(SHADOW_CUBE)
+// The fragment's (s, t, r, q) in its spot map (six spots: in face g_face's).
+vec4 spot_coords() {
+#ifdef TEXGEN_FRAGMENT
+#ifdef SIX_SPOTS
+    return u_texgens[g_face] * vec4(v_world - u_light_pos, 1.0);
+#else
+    return u_texgen * vec4(v_world - u_light_pos, 1.0);
+#endif
+#elif defined(SIX_SPOTS)
+    return v_shadows[g_face];
+#else
+    return v_shadow;
+#endif
+}
+
 // The fragment's map coordinates (s, t, r, q); an omni light's six spots pick the face first.
 // WARP_DEPTH: r from the light's own view, where the map's depth comes from (trapezoidal).
 vec4 shadow_coords() {
 #ifdef SIX_SPOTS
     g_face = major_face(v_world - u_light_pos);
-    vec4 stq = v_shadows[g_face];
-#ifdef WARP_DEPTH
-    vec2 rq = v_shadow_refs[g_face];
 #endif
-#else
-    vec4 stq = v_shadow;
+    vec4 stq = spot_coords();
 #ifdef WARP_DEPTH
+#ifdef TEXGEN_FRAGMENT
+#ifdef SIX_SPOTS
+    vec2 rq = (u_texgen_depths[g_face] * vec4(v_world - u_light_pos, 1.0)).zw;
+#else
+    vec2 rq = (u_texgen_depth * vec4(v_world - u_light_pos, 1.0)).zw;
+#endif
+#elif defined(SIX_SPOTS)
+    vec2 rq = v_shadow_refs[g_face];
+#else
     vec2 rq = v_shadow_ref;
 #endif
 #endif
@@ -208,10 +246,9 @@ void main() {
     vec3 a = abs(d);
     vec2 face_uv = (a.x >= a.y && a.x >= a.z) ? d.yz / a.x : ((a.y >= a.z) ? d.xz / a.y : d.xy / a.z);
     vec2 texel = (face_uv * 0.5 + 0.5) * u_map_size;
-#elif defined(SIX_SPOTS)
-    vec2 texel = v_shadows[g_face].xy / v_shadows[g_face].w * u_map_size;
 #else
-    vec2 texel = v_shadow.xy / v_shadow.w * u_map_size;
+    vec4 stq = spot_coords();
+    vec2 texel = stq.xy / stq.w * u_map_size;
 #endif
     ivec2 cell = ivec2(floor(texel));
     if (((cell.x + cell.y) & 1) == 1) o_color.rgb *= vec3(0.55, 0.6, 1.0);

@@ -18,7 +18,7 @@ out vec2 v_uv;
 out vec2 v_lightmap_uv;
 out vec3 v_color;
 
-#ifdef SHADOW_MAP
+#if defined(SHADOW_MAP) && !defined(TEXGEN_FRAGMENT)
 // glTexGen(EYE_LINEAR) with planes T = B * P_light * V_light * inverse(V_camera), specified while
 // the camera's modelview is loaded: applied to eye coordinates it gives (s, t, r, q).
 uniform mat4 u_view;    // world -> camera eye
@@ -58,7 +58,7 @@ void main() {
     v_uv = a_uv;
     v_lightmap_uv = a_lightmap_uv;
     v_color = a_color.rgb;
-#ifdef SHADOW_MAP
+#if defined(SHADOW_MAP) && !defined(TEXGEN_FRAGMENT)
 #ifdef SIX_SPOTS
     for (int f = 0; f < 6; f++) v_shadows[f] = u_texgens[f] * (u_view * world);
 #else

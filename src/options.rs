@@ -729,9 +729,17 @@ option_enum! {
         /// offset's constant term: walls facing an omni light's face head-on get acne (oa_dm3's
         /// light 2: 4.7% of its receivers falsely shadowed under six spot maps).
         EyeLinear = "eye_linear",
-        /// The same planes composed in double precision and applied to the position relative to
-        /// the light, so no large coordinates cancel.
+        /// The same planes composed in double precision and applied, per vertex, to the position
+        /// relative to the light, so no large coordinates cancel. The projective coordinates
+        /// (s, t, r, q) are then interpolated, and how a rasteriser rounds that interpolation
+        /// shows on walls facing a face head-on: oa_dm3's light 2 under six spot maps, 0.058%
+        /// falsely shadowed on llvmpipe but 0.485% on softpipe (docs/shadow-maps.md).
         Light = "light",
+        /// The light-relative planes applied per fragment to the interpolated world position
+        /// minus the light's, as the cube map computes its compared depth: only the position,
+        /// linear, is interpolated (oa_dm3's light 2: 0.058% on llvmpipe, 0.078% on softpipe,
+        /// as the cube map).
+        Fragment = "fragment",
     }
 }
 
@@ -1074,9 +1082,11 @@ define_options! {
         priority_mipmap: bool = false;
         /// Hybrid priority and depth: the bias, as a share of each unit's own depth range.
         priority_bias: f32 = 0.02, in 0.0 ..= 1.0;
-        /// Where the texgen planes apply: eye coordinates as glTexGen does (the paper), or
-        /// positions relative to the light with the planes composed in double precision.
-        texgen: TexgenSpace = TexgenSpace::Light;
+        /// Where the texgen planes apply: eye coordinates as glTexGen does (the paper);
+        /// positions relative to the light with the planes composed in double precision, per
+        /// vertex (`light`) or per fragment (`fragment`, the default: it holds on every
+        /// rasteriser measured).
+        texgen: TexgenSpace = TexgenSpace::Fragment;
     }
 
     /// Warped shadow maps: perspective (`technique = psm`, thesis chapter 4) and trapezoidal

@@ -1,6 +1,7 @@
-//! `technique = auto` from measured errors (the sampled reference) and measured pass times: each
-//! light's choice checked against the full reference, against independently measured costs, and
-//! for stability on a still camera.
+//! `technique = auto` from measured errors (the sampled reference) and costs the tests supply
+//! (`CostSource::Supplied`: a choice that followed this machine's pass times would change with
+//! its load): each light's choice checked against the full reference, against the supplied
+//! costs, and for stability on a still camera. What the techniques cost is `bench`'s to say.
 
 mod common;
 
@@ -8,20 +9,11 @@ use common::{gl_on, load_asset, load_scene_file, options_with};
 use shadowlab::frame::Frame;
 use shadowlab::gl::{FrameRequest, Renderer};
 use shadowlab::options::{BackendChoice, Candidate, MapBuffer, Options, Technique};
+use shadowlab::plan::auto::CostSource;
 use shadowlab::report::estimate::{learn_auto, sampled_frame};
 use shadowlab::scene::{Scene, path};
 use shadowlab::truth::{Counts, ExactMasks, Reference};
-use std::collections::BTreeMap;
-use std::sync::{Mutex, MutexGuard};
-
-/// The tests of this file compare pass times: each runs alone, so that another test's
-/// rendering on the same cores does not land in the times `auto` learns or the test measures.
-static ALONE: Mutex<()> = Mutex::new(());
-
-fn alone() -> MutexGuard<'static, ()> {
-    // A failed test poisons the lock; the others still run, one at a time.
-    ALONE.lock().unwrap_or_else(|e| e.into_inner())
-}
+use std::collections::{BTreeMap, HashMap};
 
 const AUTO: &[&str] = &["technique=auto", "accuracy=1", "width=320", "height=240"];
 
@@ -41,6 +33,16 @@ fn full_errors(scene: &Scene, frame: &Frame) -> BTreeMap<usize, Counts> {
     m.per_light.into_iter().collect()
 }
 
+/// Costs where one technique is cheaper than the other, `ratio` times, on every light.
+fn cheaper(technique: Technique, ratio: f64) -> CostSource {
+    let other = if technique == Technique::ShadowMap {
+        Technique::ShadowVolume
+    } else {
+        Technique::ShadowMap
+    };
+    CostSource::supplied([(technique.into(), 1.0), (other.into(), ratio)])
+}
+
 /// A renderer that has learnt `scene` from its camera, and the frame it then keeps.
 fn learnt(renderer: &mut Renderer, scene: &Scene, o: &Options, reference: &Reference) -> Frame {
     renderer.load_scene(scene).unwrap();
@@ -58,14 +60,21 @@ const PAPER_VOLUMES: &[&str] = &[
     "shadow_volume.edge_rule=paper",
 ];
 
+/// The margin a sampled choice may miss by: `auto` judges each technique by a 95% interval
+/// from the sampled reference, about ±0.2% near 1% on these lights (printed in the reasons),
+/// so between two errors within that of each other it may take either.
+const SAMPLING: f64 = 0.002;
+
 /// Four views of ctf_compromise under `auto` at 1% with `extra` options: every light's
-/// technique within 1% of the full reference. Returns the lights judged and how many of them
-/// volumes alone would get over 1% wrong.
+/// technique within 1% of the full reference (or, where neither technique is, the more accurate
+/// one). Returns the lights judged and how many of them volumes would get over 1% wrong.
 fn ctf_choices_within_one_percent(extra: &[&str]) -> (usize, usize) {
     let (mut scene, _, _) = load_scene_file("ctf_compromise");
     let o = options_with(&[AUTO, extra].concat());
     let reference = Reference::build(&scene);
     let (_ctx, mut renderer) = gl_on(BackendChoice::Egl, &o);
+    // Volumes cost a third of the maps: only their measured error keeps a light off them.
+    renderer.set_cost_source(cheaper(Technique::ShadowVolume, 3.0));
     let camera = scene.camera;
     let (mut lights, mut volume_misses) = (0, 0);
     for key in path::turn(&camera, 4) {
@@ -73,10 +82,10 @@ fn ctf_choices_within_one_percent(extra: &[&str]) -> (usize, usize) {
         let frame = learnt(&mut renderer, &scene, &o, &reference);
         let chosen = techniques(&frame);
         let full = full_errors(&scene, &frame);
-        // The volumes' own error in this view.
-        let volumes = {
+        // Each technique's own error in this view.
+        let forced = |renderer: &mut Renderer, t: Technique| {
             let mut v = o.clone();
-            v.technique = Technique::ShadowVolume;
+            v.technique = t;
             let f = renderer
                 .render_with(
                     &scene,
@@ -89,17 +98,26 @@ fn ctf_choices_within_one_percent(extra: &[&str]) -> (usize, usize) {
                 .unwrap();
             full_errors(&scene, &f)
         };
+        let volumes = forced(&mut renderer, Technique::ShadowVolume);
+        let maps = forced(&mut renderer, Technique::ShadowMap);
         for (light, t) in &chosen {
             let e = full[light].rates().total;
-            let sv = volumes.get(light).map_or(0.0, |c| c.rates().total);
+            let of = |m: &BTreeMap<usize, Counts>| {
+                m.get(light)
+                    .unwrap_or_else(|| panic!("light {light} not planned when forced"))
+                    .rates()
+                    .total
+            };
+            let (sv, sm) = (of(&volumes), of(&maps));
             println!(
-                "{extra:?} yaw {:.0}: light {light}: {t} full error {:.3}% (volumes {:.3}%)",
+                "{extra:?} yaw {:.0}: light {light}: {t} full error {:.3}% (volumes {:.3}%, maps {:.3}%)",
                 key.yaw_deg,
                 100.0 * e,
-                100.0 * sv
+                100.0 * sv,
+                100.0 * sm
             );
             assert!(
-                e <= 0.01,
+                e <= 0.01f64.max(sv.min(sm)) + SAMPLING,
                 "light {light} at yaw {}: {t} gets {:.3}% wrong ({:?})",
                 key.yaw_deg,
                 100.0 * e,
@@ -114,7 +132,6 @@ fn ctf_choices_within_one_percent(extra: &[&str]) -> (usize, usize) {
 
 #[test]
 fn auto_at_one_percent_picks_for_every_light_of_ctf_compromise_a_technique_within_it() {
-    let _alone = alone();
     let (lights, _) = ctf_choices_within_one_percent(&[]);
     assert!(lights >= 8, "too few lights in view to test");
     // With the paper's volumes, which the constant estimate (0.05%) cannot tell from exact.
@@ -126,144 +143,107 @@ fn auto_at_one_percent_picks_for_every_light_of_ctf_compromise_a_technique_withi
     );
 }
 
-/// Each light's milliseconds (its passes summed) in a frame of `o`.
-fn light_times(renderer: &mut Renderer, scene: &Scene, o: &Options) -> BTreeMap<usize, f64> {
-    let f = renderer.render(scene, o).unwrap();
-    let mut sums: BTreeMap<usize, f64> = BTreeMap::new();
-    for p in &f.passes {
-        if let Some(l) = p.pass.light {
-            *sums.entry(l).or_default() += p.ms;
-        }
+/// Each technique's full-reference error per light on `scene` from its camera, forced on every
+/// light, on a renderer of its own (320x240, as `AUTO`).
+fn forced_errors(scene: &Scene) -> HashMap<Technique, BTreeMap<usize, Counts>> {
+    let forced = |t: &str| options_with(&[t, "width=320", "height=240"]);
+    let (_c, mut r) = gl_on(BackendChoice::Egl, &forced("technique=none"));
+    r.load_scene(scene).unwrap();
+    let mut errors = HashMap::new();
+    for t in [Technique::ShadowMap, Technique::ShadowVolume] {
+        let o = forced(&format!("technique={t}"));
+        let f = r
+            .render_with(
+                scene,
+                &o,
+                FrameRequest {
+                    masks: true,
+                    ..Default::default()
+                },
+            )
+            .unwrap();
+        errors.insert(t, full_errors(scene, &f));
     }
-    sums
+    errors
 }
 
-/// Median milliseconds of each light's passes under each of `runs`, taken in turns (three
-/// frames of each, then again) so that whatever slows the machine meanwhile slows them alike.
-/// The first frame of a turn is not counted: a change of options redraws the maps and
-/// rebuilds what the frames keep, which a light that stays with a technique does not pay.
-fn light_costs(
-    renderer: &mut Renderer,
-    scene: &Scene,
-    runs: &[&Options],
-) -> Vec<BTreeMap<usize, f64>> {
-    let mut per: Vec<BTreeMap<usize, Vec<f64>>> = vec![BTreeMap::new(); runs.len()];
-    for _turn in 0..4 {
-        for (o, times) in runs.iter().zip(&mut per) {
-            for frame in 0..3 {
-                let lights = light_times(renderer, scene, o);
-                if frame > 0 {
-                    for (l, ms) in lights {
-                        times.entry(l).or_default().push(ms);
-                    }
-                }
-            }
-        }
-    }
-    per.into_iter()
-        .map(|lights| {
-            lights
-                .into_iter()
-                .map(|(l, mut v)| {
-                    v.sort_by(f64::total_cmp);
-                    (l, v[v.len() / 2])
-                })
-                .collect()
-        })
-        .collect()
-}
-
+/// Under each of two cost models, one technique cheaper on every light, `auto` takes for each
+/// light the cheaper technique when its error is well within the target, never a technique that
+/// misses the target, and holds its choice while the camera stands still.
 #[test]
 fn auto_on_oa_dm1_takes_the_cheaper_technique_that_meets_the_target_and_holds_it() {
-    let _alone = alone();
     let (scene, _, _) = load_scene_file("oa_dm1");
     let o = options_with(AUTO);
     let reference = Reference::build(&scene);
-    let (_ctx, mut renderer) = gl_on(BackendChoice::Egl, &o);
-    let frame = learnt(&mut renderer, &scene, &o, &reference);
-    let chosen = techniques(&frame);
-    assert!(!chosen.is_empty());
-    // Each technique forced on every light: its full error and its cost per light, measured
-    // apart from `auto` on a renderer of its own.
-    let forced: Vec<Options> = ["technique=shadow_map", "technique=shadow_volume"]
-        .iter()
-        .map(|t| options_with(&[t, "width=320", "height=240"]))
-        .collect();
-    // Its own context, gone before `auto`'s renderer draws again.
-    let measured = {
-        let (_c, mut r) = gl_on(BackendChoice::Egl, &forced[0]);
-        r.load_scene(&scene).unwrap();
-        let costs = light_costs(&mut r, &scene, &forced.iter().collect::<Vec<_>>());
-        let mut measured = std::collections::HashMap::new();
-        for (f, cost) in forced.iter().zip(costs) {
-            let framed = r
-                .render_with(
-                    &scene,
-                    f,
-                    FrameRequest {
-                        masks: true,
-                        ..Default::default()
-                    },
-                )
-                .unwrap();
-            measured.insert(f.technique, (full_errors(&scene, &framed), cost));
-        }
-        measured
+    let full = forced_errors(&scene);
+    let error = |t: Technique, light: usize| {
+        full[&t]
+            .get(&light)
+            .unwrap_or_else(|| panic!("light {light} not planned under {t}"))
+            .rates()
+            .total
     };
-    for (light, t) in &chosen {
-        let meets = |t: Technique| measured[&t].0[light].rates().total <= 0.01;
-        let cost = |t: Technique| measured[&t].1.get(light).copied().unwrap_or(0.0);
-        let other = if *t == Technique::ShadowMap {
-            Technique::ShadowVolume
-        } else {
-            Technique::ShadowMap
-        };
-        println!(
-            "light {light}: {t} ({:.2} ms, meets: {}) against {other} ({:.2} ms, meets: {})",
-            cost(*t),
-            meets(*t),
-            cost(other),
-            meets(other)
-        );
-        assert!(meets(*t), "light {light}: {t} misses 1%");
-        // The other is not clearly cheaper while also meeting the target. "Clearly": by more
-        // than `estimate.hysteresis` (25%) and 0.5 ms, since llvmpipe's pass times on a
-        // 2-core machine wander by about that much from one run to the next.
-        if meets(other) {
+    for cheap in [Technique::ShadowMap, Technique::ShadowVolume] {
+        let (_ctx, mut renderer) = gl_on(BackendChoice::Egl, &o);
+        renderer.set_cost_source(cheaper(cheap, 4.0));
+        let frame = learnt(&mut renderer, &scene, &o, &reference);
+        let chosen = techniques(&frame);
+        assert!(!chosen.is_empty());
+        let mut took_cheap = 0;
+        for (light, t) in &chosen {
+            println!(
+                "{cheap} cheaper: light {light}: {t} (maps {:.3}%, volumes {:.3}%)",
+                100.0 * error(Technique::ShadowMap, *light),
+                100.0 * error(Technique::ShadowVolume, *light)
+            );
+            let best =
+                error(Technique::ShadowMap, *light).min(error(Technique::ShadowVolume, *light));
             assert!(
-                cost(other) >= 0.75 * cost(*t) - 0.5,
-                "light {light}: {other} at {:.2} ms meets 1% too and is cheaper than {t} at {:.2} \
-                 ms ({:?})",
-                cost(other),
-                cost(*t),
+                error(*t, *light) <= 0.01f64.max(best) + SAMPLING,
+                "light {light}: {t} misses 1% ({:?})",
                 frame.plan_stats.choices
             );
+            // Well within the target (by more than the sampling margin), the cheaper technique
+            // meets it surely and must be taken.
+            if error(cheap, *light) < 0.01 - 2.0 * SAMPLING {
+                assert_eq!(
+                    *t, cheap,
+                    "light {light}: {cheap} is cheaper and meets 1% ({:?})",
+                    frame.plan_stats.choices
+                );
+                took_cheap += 1;
+            }
         }
-    }
-    // A still camera: 24 more frames, sampled as they run, and no light changes technique.
-    for i in 0..24 {
-        let f = sampled_frame(
-            &mut renderer,
-            &scene,
-            &scene.camera,
-            &o,
-            &reference,
-            100 + i,
-        )
-        .unwrap()
-        .frame;
-        assert_eq!(
-            techniques(&f),
-            chosen,
-            "frame {i}: {:?}",
-            f.plan_stats.choices
+        // Both techniques meet 1% on most of oa_dm1's lights from its camera: the cost decided.
+        assert!(
+            took_cheap * 2 > chosen.len(),
+            "{cheap}: {took_cheap} of {}",
+            chosen.len()
         );
+        // A still camera: 24 more frames, sampled as they run, and no light changes technique.
+        for i in 0..24 {
+            let f = sampled_frame(
+                &mut renderer,
+                &scene,
+                &scene.camera,
+                &o,
+                &reference,
+                100 + i,
+            )
+            .unwrap()
+            .frame;
+            assert_eq!(
+                techniques(&f),
+                chosen,
+                "frame {i}: {:?}",
+                f.plan_stats.choices
+            );
+        }
     }
 }
 
 #[test]
 fn auto_leaves_a_technique_when_its_measured_error_rises() {
-    let _alone = alone();
     // ctf_compromise with the paper's volumes: facing back (yaw + 180°) light 0's volumes are
     // exact; facing the spawn's way they get about 43% of its receivers wrong.
     let (mut scene, _, _) = load_scene_file("ctf_compromise");
@@ -273,6 +253,8 @@ fn auto_leaves_a_technique_when_its_measured_error_rises() {
     let o = options_with(&[AUTO, PAPER_VOLUMES, &["estimate.hysteresis=1"]].concat());
     let reference = Reference::build(&scene);
     let (_ctx, mut renderer) = gl_on(BackendChoice::Egl, &o);
+    // Volumes cheaper: only their error can send the light to maps.
+    renderer.set_cost_source(cheaper(Technique::ShadowVolume, 2.0));
     renderer.load_scene(&scene).unwrap();
     // Facing back, `auto` learns both techniques of every light (maps three frames, then volumes
     // three) and, never moving for cost, keeps volumes while they meet the target.
@@ -325,7 +307,6 @@ fn auto_leaves_a_technique_when_its_measured_error_rises() {
 /// shadows with the ID buffer, and the frame errs as an ID buffer does (under 0.1% there).
 #[test]
 fn auto_chooses_the_id_buffer_where_depth_maps_without_offset_fail() {
-    let _alone = alone();
     let (scene, _, _) = load_asset("assets/hard/grazing.toml");
     let o = options_with(
         &[
@@ -338,12 +319,17 @@ fn auto_chooses_the_id_buffer_where_depth_maps_without_offset_fail() {
         .concat(),
     );
     let reference = Reference::build(&scene);
-    let (_ctx, mut renderer) = gl_on(BackendChoice::Egl, &o);
-    let frame = learnt(&mut renderer, &scene, &o, &reference);
     let id = Candidate {
         technique: Technique::ShadowMap,
         buffer: MapBuffer::Id,
     };
+    let (_ctx, mut renderer) = gl_on(BackendChoice::Egl, &o);
+    // Depth maps a third of the ID buffer's cost: only their error sends a light to IDs.
+    renderer.set_cost_source(CostSource::supplied([
+        (Technique::ShadowMap.into(), 1.0),
+        (id, 3.0),
+    ]));
+    let frame = learnt(&mut renderer, &scene, &o, &reference);
     let full = full_errors(&scene, &frame);
     assert!(!full.is_empty(), "no light planned");
     for (light, counts) in &full {

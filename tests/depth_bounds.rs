@@ -3,7 +3,7 @@
 
 mod common;
 
-use common::{Measured, Measurer, options_with};
+use common::{Measured, Measurer, SLIVER_SPECKS, assert_masks_agree_but, options_with};
 use shadowlab::images::MaskValue;
 use shadowlab::scene::builtin;
 
@@ -39,6 +39,18 @@ fn shadowed_pixels_lie_within_the_range(m: &Measured) -> usize {
     checked
 }
 
+/// Under the default options on the built-in scene, the volumes' error against the exact
+/// reference away from shadow edges: most of it lies under the alpha-tested grate, whose holes
+/// geometric volumes cannot follow (0.363% on llvmpipe and softpipe alike; tests/shadow_volume.rs
+/// holds the rest of the scene under 0.1%). Half a point over it would be a count gone wrong.
+const ERROR_EXCL_BOUNDARY: f64 = 0.005;
+
+/// Where the GL has `EXT_depth_bounds_test` (softpipe, most GPUs), every drawn volume part is
+/// bounded by it instead of clipped, and the masks equal the emulation's (clip planes behind the
+/// depth buffer) outside the edge band: clipping cuts the volumes' triangles where bounding does
+/// not, so a pixel at a shadow's edge may fall the other way. Where it lacks it (llvmpipe), the
+/// frame takes the emulation and says so; the bounded path is then not run here, and `.ci/run`
+/// runs this test again under softpipe, which has the extension.
 #[test]
 fn the_extension_where_present_and_its_emulation_give_the_same_masks() {
     let asked = options_with(&[SV]);
@@ -63,35 +75,48 @@ fn the_extension_where_present_and_its_emulation_give_the_same_masks() {
     // The range the test is (or would be) given is sound on every GL.
     let checked = shadowed_pixels_lie_within_the_range(&emulated);
     assert!(checked > 1000, "{checked} shadowed pixels");
+    let e = emulated.total.rates().total_excl_boundary;
+    assert!(e < ERROR_EXCL_BOUNDARY, "emulated: {:.3}%", 100.0 * e);
 
     if has {
-        // The test ran in place of the clip planes, and changed no mask pixel.
+        // The test ran in place of the clip planes, on every part drawn.
         assert_eq!(listed(&with), vec![]);
-        assert!(sum(&with, |v| v.parts_depth_bounded) > 0);
+        let drawn = sum(&with, |v| v.parts_drawn);
+        assert!(drawn > 0);
+        assert_eq!(sum(&with, |v| v.parts_depth_bounded), drawn);
         assert_eq!(sum(&with, |v| v.parts_depth_clipped), 0);
         shadowed_pixels_lie_within_the_range(&with);
+        let e = with.total.rates().total_excl_boundary;
+        assert!(e < ERROR_EXCL_BOUNDARY, "bounded: {:.3}%", 100.0 * e);
+        // Clip planes cut the volumes' triangles where bounding does not: at a shadow's edge a
+        // pixel may fall the other way, and the slivers one-pass stencil may count apart
+        // (`SLIVER_SPECKS`) are not the same triangles.
+        for l in 0..2 {
+            let d = assert_masks_agree_but(
+                with.mask(l),
+                emulated.mask(l),
+                SLIVER_SPECKS,
+                &format!("light {l}"),
+            );
+            println!("light {l}: bounded against emulated: {d:?}");
+        }
+        println!(
+            "EXT_depth_bounds_test used: {drawn} parts bounded; {} clipped under the emulation; \
+             error excl. boundary {:.3}% bounded, {:.3}% emulated",
+            sum(&emulated, |v| v.parts_depth_clipped),
+            100.0 * with.total.rates().total_excl_boundary,
+            100.0 * emulated.total.rates().total_excl_boundary,
+        );
     } else {
         // Missing: the default frame takes the same fallback and says so.
         assert_eq!(listed(&with), fallback);
         assert_eq!(sum(&with, |v| v.parts_depth_bounded), 0);
         assert!(sum(&with, |v| v.parts_depth_clipped) > 0);
+        println!(
+            "EXT_depth_bounds_test absent: the emulation checked ({} parts clipped, {checked} \
+             shadowed pixels within range); the bounded path runs where the GL has the \
+             extension (GALLIUM_DRIVER=softpipe, .ci/run)",
+            sum(&emulated, |v| v.parts_depth_clipped),
+        );
     }
-    let lights: Vec<usize> = with.frame.masks.iter().map(|k| k.light).collect();
-    assert_eq!(lights.len(), 2);
-    for l in lights {
-        let differ = with
-            .mask(l)
-            .values
-            .iter()
-            .zip(&emulated.mask(l).values)
-            .filter(|(a, b)| a != b)
-            .count();
-        assert_eq!(differ, 0, "light {l}: {differ} mask pixels differ");
-    }
-    println!(
-        "EXT_depth_bounds_test {}: {} parts bounded, {} clipped under the emulation, {checked} shadowed pixels within range",
-        if has { "used" } else { "absent (emulated)" },
-        sum(&with, |v| v.parts_depth_bounded),
-        sum(&emulated, |v| v.parts_depth_clipped),
-    );
 }

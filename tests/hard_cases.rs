@@ -450,6 +450,15 @@ fn case07_behind_the_spot_outside_its_fov_and_cube_seams() {
     assert_eq!(six.light(1).receiver_mismatch, 0);
     assert_eq!(cube.light(1).receiver_mismatch, 0);
     assert!(rates(&six).total_excl_boundary < 0.02 && rates(&cube).total_excl_boundary < 0.02);
+    // PCF on the cube: its taps cross the faces' seams through the cube sampler, so it moves
+    // decisions near shadow edges only, by up to a texel (several pixels here), and away from
+    // them stays as accurate as nearest (0.008% against 0.005% measured; a seam sampled from
+    // the wrong face would shadow or light whole strips: the bound is 0.1%).
+    assert_eq!(cube_pcf.light(1).receiver_mismatch, 0);
+    assert!(rates(&cube_pcf).total_excl_boundary < 0.001);
+    let filtered = truth::mask_difference(cube.mask(1), cube_pcf.mask(1));
+    println!("{case}: pcf3x3 against nearest on the cube: {filtered:?}");
+    assert!(filtered.differing > 0, "the filter changed nothing");
     // Behind a narrow spot (cutoff 40°) nothing is lit: the lit pass's cone test discards
     // those points before any shadow lookup (the wide spot below reaches the lookup).
     let g = six.frame.gbuffer.as_ref().unwrap();
@@ -721,7 +730,6 @@ fn case10_ten_thousand_frames_of_a_moving_light_on_oa_dm1() {
     let before = Footprint::take(&gl);
     const FRAMES: usize = 10_000;
     const PERIOD: usize = 1_000;
-    let start = std::time::Instant::now();
     let mut static_checks = 0;
     for i in 1..=FRAMES {
         let a = (i % PERIOD) as f32 / PERIOD as f32 * std::f32::consts::TAU;
@@ -741,7 +749,6 @@ fn case10_ten_thousand_frames_of_a_moving_light_on_oa_dm1() {
             render(&mut m, o);
         }
     }
-    let elapsed = start.elapsed().as_secs_f64();
     // Back home: the moving light's masks equal the first frame's.
     m.scene.lights[1].position = home;
     let last_sm = m.measure(&sm);
@@ -757,7 +764,7 @@ fn case10_ten_thousand_frames_of_a_moving_light_on_oa_dm1() {
     }
     let after = Footprint::take(&gl);
     println!(
-        "{case}: {FRAMES} frames in {elapsed:.1} s, {static_checks} static checks; GL names grew by {:?}; {}",
+        "{case}: {FRAMES} frames, {static_checks} static checks; GL names grew by {:?}; {}",
         after.names_since(&before),
         after.memory_since(&before)
     );

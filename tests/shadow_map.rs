@@ -3,7 +3,7 @@
 
 mod common;
 
-use common::{Measurer, image_difference, load_scene_file, options_with};
+use common::{Measurer, assert_masks_agree, image_difference, load_scene_file, options_with};
 use shadowlab::images::MaskValue;
 use shadowlab::plan::pass::{PassId, Stage};
 use shadowlab::scene::builtin;
@@ -121,13 +121,18 @@ fn copy_and_fbo_paths_give_identical_masks() {
     );
 }
 
+/// The GL leaves to the implementation at what precision the hardware compare takes r (a GPU
+/// may quantise it to the texture's 24 bits; Mesa compares in float, as the shader does), so a
+/// compare that lands exactly on a texel's depth may go either way: only where an occluder meets
+/// its receiver, at a shadow's edge. Away from the edges the two decide alike.
 #[test]
-fn hardware_and_shader_compare_give_identical_masks_with_nearest_filtering() {
+fn hardware_and_shader_compare_agree_with_nearest_filtering() {
     let mut m = Measurer::new(builtin::default_scene(), &options_with(&[SM]));
     let hw = m.measure(&options_with(&[SM]));
     let shader = m.measure(&options_with(&[SM, "shadow_map.compare=shader"]));
     for l in 0..2 {
-        assert_eq!(hw.mask(l), shader.mask(l), "light {l}");
+        let d = assert_masks_agree(hw.mask(l), shader.mask(l), false, &format!("light {l}"));
+        println!("light {l}: hardware against shader compare: {d:?}");
     }
 }
 
@@ -422,12 +427,16 @@ fn offsets_grow_per_light_under_the_paper_and_can_go_to_the_lit_pass() {
     assert!((both.total - default.total).abs() < 0.002);
 }
 
+/// oa_dm3's light 2 stands 64 units from a wall its -X face sees head-on: no depth slope, so only
+/// the offset's constant term (4 units: 8 × 2^-24 in Mesa) separates the wall from its own map,
+/// and any rounding of the compared depth beyond that is acne. The cube map computes that depth
+/// per fragment from the light-relative position; so must the six spot maps to be as clean on
+/// every rasteriser. Measured (errors of light 2's receivers; llvmpipe / softpipe, Mesa 22.3):
+/// eye-linear planes 4.73% / 5.95%; light-relative planes per vertex 0.058% / 0.485% (softpipe
+/// rounds the interpolation of the projective coordinates more); per fragment 0.058% / 0.078%;
+/// the cube map 0.058% / 0.078%.
 #[test]
 fn light_relative_texgen_keeps_six_spot_maps_free_of_rounding_acne_at_quake_scale() {
-    // oa_dm3's light 2 stands 64 units from a wall its -X face sees head-on: no depth slope,
-    // so only the offset's constant term (4 × 2^-24) separates the wall from its own map.
-    // Measured: eye-linear planes 4.73% of its receivers falsely shadowed, light-relative
-    // 0.064%, the cube map 0.064%. The bounds: acne on a whole wall against none.
     let (scene, _, options) = load_scene_file("oa_dm3");
     let mut m = Measurer::new(scene, &options);
     let six = [
@@ -435,19 +444,40 @@ fn light_relative_texgen_keeps_six_spot_maps_free_of_rounding_acne_at_quake_scal
         "plan.omni_cube=false",
         "lighting.only=2",
     ];
-    let error = |m: &mut Measurer, texgen: &str| {
+    let error = |m: &mut Measurer, set: &str| {
         let mut sets = six.to_vec();
-        sets.push(texgen);
+        sets.push(set);
         let o = options_with(&sets);
         m.measure(&o).light(2).rates().total
     };
     let eye = error(&mut m, "shadow_map.texgen=eye_linear");
-    let light = error(&mut m, "shadow_map.texgen=light");
+    let vertex = error(&mut m, "shadow_map.texgen=light");
+    let fragment = error(&mut m, "shadow_map.texgen=fragment");
+    let cube = error(&mut m, "shadow_map.omni=cube");
     println!(
-        "six spots, light 2: eye-linear {}, light-relative {}",
+        "six spots, light 2: eye-linear {}, light-relative per vertex {}, per fragment {}; cube map {}",
         pct(eye),
-        pct(light)
+        pct(vertex),
+        pct(fragment),
+        pct(cube)
     );
+    // Acne on the whole wall with the paper's planes.
     assert!(eye > 0.02, "the eye-linear planes' acne: {}", pct(eye));
-    assert!(light < 0.002, "light-relative planes: {}", pct(light));
+    // Per fragment, the six spots are as clean as the cube map, whose depth is computed the same
+    // way (within 0.01 points: the maps' ranges differ, six fitted ones against one).
+    assert!(
+        fragment <= cube + 0.0001,
+        "per fragment {} against the cube's {}",
+        pct(fragment),
+        pct(cube)
+    );
+    assert!(fragment < 0.002, "per fragment: {}", pct(fragment));
+    // Per vertex, the double-precision planes remove the cancellation, not the interpolation's
+    // rounding: a tenth of the eye-linear acne at most on any rasteriser measured.
+    assert!(
+        vertex < eye / 10.0,
+        "per vertex {} against {}",
+        pct(vertex),
+        pct(eye)
+    );
 }

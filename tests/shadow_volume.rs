@@ -3,7 +3,10 @@
 
 mod common;
 
-use common::{Measurer, floor_quad, load_scene_file, options_with, scene_of};
+use common::{
+    Measurer, SLIVER_SPECKS, assert_masks_agree_but, floor_quad, load_scene_file, options_with,
+    scene_of,
+};
 use glam::Vec3;
 use shadowlab::images::{Mask, MaskValue};
 use shadowlab::scene::shapes::{MeshData, cuboid};
@@ -292,7 +295,7 @@ fn more_than_255_overlapping_volumes_break_saturating_counts_only() {
 }
 
 #[test]
-fn two_pass_and_separate_stencil_give_identical_masks() {
+fn two_pass_and_separate_stencil_count_alike() {
     // The planner counts in one pass by default (`plan.one_pass_stencil`): the two-pass
     // configurations switch that off, and the plan says how many passes ran.
     const TWO: &str = "plan.one_pass_stencil=false";
@@ -314,13 +317,18 @@ fn two_pass_and_separate_stencil_give_identical_masks() {
     }
     // Depth-pass parts must really be drawn for the depth-pass comparison to mean anything.
     assert!(two_zpass.frame.plan_stats.zpass_parts > 0);
+    // The same triangles counted with the same signs: the same masks, but where the GL rounds
+    // a sliver's facing apart for culling and for two-sided stencil (`SLIVER_SPECKS`).
     for l in 0..2 {
-        assert_eq!(differing(two.mask(l), one.mask(l)), 0, "zfail light {l}");
-        assert_eq!(
-            differing(two_zpass.mask(l), one_zpass.mask(l)),
-            0,
-            "zpass light {l}"
-        );
+        for (what, a, b) in [("zfail", &two, &one), ("zpass", &two_zpass, &one_zpass)] {
+            let d = assert_masks_agree_but(
+                a.mask(l),
+                b.mask(l),
+                SLIVER_SPECKS,
+                &format!("{what} light {l}"),
+            );
+            println!("{what} light {l}: two passes against one: {d:?}");
+        }
     }
 }
 

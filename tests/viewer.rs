@@ -1,7 +1,7 @@
 //! The viewer, driven by scripts under `xvfb-run`: it opens on the built-in scene and on oa_dm1,
 //! switches techniques, shows volumes, walks through a frame, replays a camera path, saves
-//! screenshots and exits with status 0. The screenshots land in `docs/screenshots/` (the
-//! README shows them; those of OpenArena maps are not committed).
+//! screenshots and exits with status 0. Everything it writes goes to a temporary folder
+//! (`scripts/viewer-screenshots.sh` makes the screenshots docs/viewer.md shows).
 #![cfg(feature = "window")]
 
 mod common;
@@ -11,9 +11,29 @@ use std::path::{Path, PathBuf};
 use std::process::Command;
 
 fn shots() -> PathBuf {
-    let d = Path::new(env!("CARGO_MANIFEST_DIR")).join("docs/screenshots");
+    let d = std::env::temp_dir().join(format!("shadowlab-viewer-{}-shots", std::process::id()));
     std::fs::create_dir_all(&d).unwrap();
     d
+}
+
+/// The rasteriser behind a path (`info --json`'s renderer and version): the window's under the
+/// virtual X server, or the headless default's.
+fn rasteriser(window: bool) -> String {
+    let mut c = if window {
+        let mut c = Command::new("xvfb-run");
+        c.args(["-a", env!("CARGO_BIN_EXE_shadowlab")]);
+        c
+    } else {
+        Command::new(env!("CARGO_BIN_EXE_shadowlab"))
+    };
+    c.args(["info", "--json"]);
+    if window {
+        c.args(["--backend", "window"]);
+    }
+    let out = c.output().unwrap();
+    let v: serde_json::Value = serde_json::from_slice(&out.stdout)
+        .unwrap_or_else(|e| panic!("info --json: {e}: {}", String::from_utf8_lossy(&out.stderr)));
+    format!("{} / {}", v["renderer"], v["version"])
 }
 
 /// Runs `shadowlab view` with `script` under a virtual X server; panics with its output unless
@@ -109,7 +129,8 @@ fn the_viewer_drives_the_builtin_scene_and_oa_dm1_from_scripts() {
     println!("built-in: shadow volumes darken {darker} of {total} px ({differing} differ)");
     assert!(darker > total / 50 && differing < total * 3 / 4);
 
-    // The viewer's frame is the headless renderer's frame, pixel for pixel.
+    // The viewer's frame is the headless renderer's frame: pixel for pixel on one rasteriser;
+    // on two (a GPU's EGL, Xvfb's software GLX), the same image in substance.
     let (w, h) = sv.dimensions();
     let headless = std::env::temp_dir().join(format!(
         "shadowlab-viewer-{}-headless.png",
@@ -123,11 +144,21 @@ fn the_viewer_drives_the_builtin_scene_and_oa_dm1_from_scripts() {
         .status()
         .unwrap();
     assert!(st.success());
-    let (_, differing) = darker_and_differing(&sv, &load(&headless));
-    assert_eq!(
-        differing, 0,
-        "the viewer's frame differs from `render` in {differing} px"
-    );
+    let headless = load(&headless);
+    let (_, differing) = darker_and_differing(&sv, &headless);
+    let (window_gl, egl) = (rasteriser(true), rasteriser(false));
+    println!("built-in: the viewer ({window_gl}) against `render` ({egl}): {differing} px differ");
+    if window_gl == egl {
+        assert_eq!(
+            differing, 0,
+            "the viewer's frame differs from `render` in {differing} px"
+        );
+    } else {
+        let mean = |i: &RgbaImage| i.pixels().map(luma).sum::<f32>() / (w * h) as f32;
+        let (a, b) = (mean(&sv), mean(&headless));
+        assert!((a - b).abs() < 0.02 * b, "mean luma {a} against {b}");
+        assert!(differing < total / 20, "{differing} px differ");
+    }
 
     // The walkthrough's third step, the stencil view and the depth view show something else
     // than the scene.
@@ -181,7 +212,7 @@ fn the_viewer_drives_the_builtin_scene_and_oa_dm1_from_scripts() {
              set technique=shadow_volume\nwait 2\nframe {}\noverlay volumes on\n\
              overlay silhouettes on\nwait 3\nframe {}\nscreenshot {}\noverlay volumes off\n\
              overlay silhouettes off\nstep 8\nwait 2\nframe {}\nset estimate.budget=0.5\n\
-             overlay estimate on\nwait 30\nquit\n",
+             overlay estimate on\nsampled 4\nquit\n",
             path.display(),
             p("oa_dm1-frame-maps.png"),
             p("oa_dm1-frame-volumes.png"),
@@ -209,11 +240,10 @@ fn the_viewer_drives_the_builtin_scene_and_oa_dm1_from_scripts() {
     let (_, motion_px) = darker_and_differing(&sv, &later);
     println!("oa_dm1: 0.4 s of motion changes {motion_px} px");
     assert!(motion_px > 1000, "the motion moved nothing: {motion_px} px");
-    // The live error ran on the frames after `overlay estimate on` (half the frame time for
-    // sampling, so that a few of the 30 frames are sampled on llvmpipe, where a frame's masks
-    // cost about a frame): every light of oa_dm1's view sampled under volumes, each estimate
-    // pooled over frames with an interval that holds volumes' error there (0.013% on the full
-    // reference of the first bench frame).
+    // The live error sampled four frames after `overlay estimate on` (`sampled 4`: however many
+    // frames that took at half the frame time for sampling): every light of oa_dm1's view
+    // sampled under volumes, each estimate pooled over those frames with an interval that holds
+    // volumes' error there (0.013% on the full reference of the first bench frame).
     let lines: Vec<&str> = out
         .lines()
         .filter(|l| l.starts_with("live error:"))
@@ -228,7 +258,7 @@ fn the_viewer_drives_the_builtin_scene_and_oa_dm1_from_scripts() {
             .and_then(|s| s.split(' ').next())
             .and_then(|s| s.parse().ok())
             .unwrap_or(0);
-        assert!(frames >= 2, "{l}");
+        assert!(frames >= 4, "{l}");
         let low: f64 = l
             .split('[')
             .nth(1)

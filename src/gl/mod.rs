@@ -26,4 +26,4 @@ pub mod walkthrough;
 pub mod window;
 
 pub use context::{Backend, ContextError, GlApi, GlContext, Profile, create_context};
-pub use renderer::{FrameRequest, Overlays, RenderError, Renderer};
+pub use renderer::{FrameRequest, Held, Overlays, RenderError, Renderer};

@@ -30,7 +30,7 @@ use crate::geometry::projection::cube_face_view;
 use crate::images::{GBuffer, Mask, MaskValue, Rgba, StencilImage};
 use crate::options::{
     Compare, CompareResult, DepthBits, Filter, MapBuffer, Options, Outside, Pipeline,
-    StencilPasses, StencilWrap, Technique, VolumeShading,
+    StencilPasses, StencilWrap, Technique, TexgenSpace, VolumeShading,
 };
 use crate::plan::auto::AutoMemory;
 use crate::plan::occlusion::DepthPyramid;
@@ -181,6 +181,9 @@ fn lit_defines(options: &Options, v: LitVariant, texel_grid: bool) -> Vec<&'stat
         }
         if o.depth_bits != DepthBits::D32f {
             d.push("REF_CLAMP");
+        }
+        if o.texgen == TexgenSpace::Fragment && !cube {
+            d.push("TEXGEN_FRAGMENT");
         }
         if o.result == CompareResult::Alpha {
             d.push("RESULT_ALPHA");
@@ -405,6 +408,17 @@ impl Programs {
     }
 }
 
+/// Counts of what a renderer keeps across frames ([`Renderer::held`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub struct Held {
+    /// Shadow-map and ID-buffer textures.
+    pub map_textures: usize,
+    /// Volume parts built and kept for the frames that draw them again.
+    pub volume_parts: usize,
+    /// Depth-pass parts' clip planes fitted to the last depth buffer.
+    pub depth_fits: usize,
+}
+
 pub struct Renderer {
     gl: Arc<glow::Context>,
     pub caps: Caps,
@@ -529,6 +543,16 @@ impl Renderer {
         self.shadow_maps.texture_count()
     }
 
+    /// What the renderer keeps across frames, counted: long runs hold these flat.
+    pub fn held(&self) -> Held {
+        let (volume_parts, depth_fits) = self.planner.held_volumes();
+        Held {
+            map_textures: self.shadow_maps.texture_count(),
+            volume_parts,
+            depth_fits,
+        }
+    }
+
     /// Drops the frusta static omni lights kept (`plan.keep_frusta`): the next frame chooses
     /// them afresh for its own view.
     pub fn forget_kept_frusta(&mut self) {
@@ -635,6 +659,12 @@ impl Renderer {
     /// What `technique = auto` has measured so far.
     pub fn auto_memory(&self) -> &AutoMemory {
         self.planner.memory()
+    }
+
+    /// Where `technique = auto` takes each light's costs from: the frames' pass times
+    /// (the default), or costs the caller supplies (tests, a cost model of another machine).
+    pub fn set_cost_source(&mut self, source: crate::plan::auto::CostSource) {
+        self.planner.set_cost_source(source);
     }
 
     /// Gives `auto` the last frame's sampled errors (its masks against `truth::sampled`): the

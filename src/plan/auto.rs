@@ -1,5 +1,7 @@
 //! `technique = auto`: per light, the cheapest technique whose error meets the `accuracy`
-//! target. Costs are measured (each light's own pass times, averaged over frames). Errors are
+//! target. Costs come from a [`CostSource`]: measured (each light's own pass times, averaged
+//! over frames) in use, supplied by the caller where the choice must not depend on the
+//! machine's speed (tests, a cost model of another GPU). Errors are
 //! measured too where the caller samples the frames (`truth::sampled`, recorded with
 //! [`AutoMemory::record_errors`]: `render`'s learning frames, `bench`, the viewer); until a
 //! technique has been sampled for a light, its error is estimated from what this project
@@ -54,10 +56,52 @@ struct MeasuredError {
     running: Running,
 }
 
+/// Where `auto` takes each light's cost per candidate from.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub enum CostSource {
+    /// The light's own pass times, summed per frame and averaged over frames (the default).
+    #[default]
+    Measured,
+    /// Milliseconds the caller gives per candidate, for every light, and per light where
+    /// `per_light` names it; a candidate given no cost is the dearest. Frame times are not
+    /// learnt, so the choice depends on the errors and these costs alone, whatever the machine.
+    Supplied {
+        per_candidate: HashMap<Candidate, f64>,
+        per_light: HashMap<(usize, Candidate), f64>,
+    },
+}
+
+impl CostSource {
+    /// The same cost for every light: `(candidate, ms)` pairs.
+    pub fn supplied(costs: impl IntoIterator<Item = (Candidate, f64)>) -> CostSource {
+        CostSource::Supplied {
+            per_candidate: costs.into_iter().collect(),
+            per_light: HashMap::new(),
+        }
+    }
+
+    /// The supplied cost of `candidate` for `light`, if this source supplies costs.
+    fn supplied_cost(&self, light: usize, candidate: Candidate) -> Option<Option<f64>> {
+        match self {
+            CostSource::Measured => None,
+            CostSource::Supplied {
+                per_candidate,
+                per_light,
+            } => Some(
+                per_light
+                    .get(&(light, candidate))
+                    .or_else(|| per_candidate.get(&candidate))
+                    .copied(),
+            ),
+        }
+    }
+}
+
 /// What `auto` has learnt: each light's measured milliseconds per candidate (an exponential
 /// moving average), its sampled error per candidate, and the candidate it last ran with.
 #[derive(Debug, Clone, Default)]
 pub struct AutoMemory {
+    source: CostSource,
     costs: HashMap<(usize, Candidate), f64>,
     /// Frames timed per light and candidate.
     frames: HashMap<(usize, Candidate), u32>,
@@ -87,12 +131,30 @@ fn technique_options(candidate: Candidate, options: &Options) -> String {
 }
 
 impl AutoMemory {
-    /// `candidate`'s measured cost for `light` (a bare technique: its maps store depth).
-    pub fn cost(&self, light: usize, candidate: impl Into<Candidate>) -> Option<f64> {
-        self.costs.get(&(light, candidate.into())).copied()
+    /// Takes costs from `source` from now on; the costs measured so far are forgotten.
+    pub fn set_cost_source(&mut self, source: CostSource) {
+        self.source = source;
+        self.costs.clear();
     }
 
-    /// Whether `candidate`'s cost for `light` is past its first frames ([`WARM_FRAMES`]).
+    /// Where the costs come from.
+    pub fn cost_source(&self) -> &CostSource {
+        &self.source
+    }
+
+    /// `candidate`'s cost for `light` (a bare technique: its maps store depth): supplied, or
+    /// measured.
+    pub fn cost(&self, light: usize, candidate: impl Into<Candidate>) -> Option<f64> {
+        let candidate = candidate.into();
+        match self.source.supplied_cost(light, candidate) {
+            Some(supplied) => supplied,
+            None => self.costs.get(&(light, candidate)).copied(),
+        }
+    }
+
+    /// Whether `light` has run [`WARM_FRAMES`] frames with `candidate`: its measured cost is
+    /// past its first frames, and its error sampled as often as the others' (a light tries
+    /// every candidate in turn until each is warm, whichever source its costs come from).
     pub fn warm(&self, light: usize, candidate: impl Into<Candidate>) -> bool {
         self.frames
             .get(&(light, candidate.into()))
@@ -134,10 +196,13 @@ impl AutoMemory {
                 continue;
             }
             self.last.insert(light, candidate);
-            let ms = per_light.get(&light).copied().unwrap_or(0.0);
             let frames = self.frames.entry((light, candidate)).or_insert(0);
             *frames += 1;
             let n = *frames;
+            if self.source != CostSource::Measured {
+                continue;
+            }
+            let ms = per_light.get(&light).copied().unwrap_or(0.0);
             self.costs
                 .entry((light, candidate))
                 .and_modify(|e| {
@@ -611,6 +676,45 @@ mod tests {
         // Unmeasured, an ID buffer is expected to err four times as much as a depth map.
         let ratio = estimated_error(id, &o, false) / estimated_error(depth, &o, false);
         assert_eq!(ratio, 4.0);
+    }
+
+    #[test]
+    fn supplied_costs_decide_whatever_the_frames_took() {
+        let o = Options {
+            accuracy: 1.0,
+            ..Options::default()
+        };
+        let maps = Candidate::from(Technique::ShadowMap);
+        let volumes = Candidate::from(Technique::ShadowVolume);
+        let mut m = AutoMemory::default();
+        m.set_cost_source(CostSource::supplied([(maps, 5.0), (volumes, 1.0)]));
+        assert_eq!(m.cost(7, volumes), Some(1.0));
+        // Each candidate still runs its first frames (its error is sampled meanwhile); frames
+        // that took the opposite of the supplied costs are not learnt.
+        assert_eq!(choose(0, &o, &m, false).candidate, maps);
+        for _ in 0..WARM_FRAMES {
+            m.record(&[pass("light0.stencil", 50.0)], &[(0, volumes)]);
+            m.record(&[pass("light0.shadow_map", 0.1)], &[(0, maps)]);
+        }
+        assert!(m.warm(0, maps) && m.warm(0, volumes) && !m.warm(3, maps));
+        assert_eq!(m.cost(0, volumes), Some(1.0));
+        assert_eq!(m.last(0), Some(maps));
+        // Running maps now, volumes are cheaper by more than the hysteresis: volumes.
+        assert_eq!(choose(0, &o, &m, false).candidate, volumes);
+        for _ in 0..WARM_FRAMES {
+            m.record(&[pass("light3.shadow_map", 9.0)], &[(3, maps)]);
+            m.record(&[pass("light3.stencil", 0.1)], &[(3, volumes)]);
+        }
+        // A light of its own: its cost overrides the shared one.
+        m.set_cost_source(CostSource::Supplied {
+            per_candidate: [(maps, 5.0), (volumes, 1.0)].into(),
+            per_light: [((3, maps), 0.5)].into(),
+        });
+        assert_eq!(choose(3, &o, &m, false).candidate, maps);
+        assert_eq!(choose(0, &o, &m, false).candidate, volumes);
+        // Back to measuring: nothing supplied is kept as a measurement.
+        m.set_cost_source(CostSource::Measured);
+        assert_eq!(m.cost(0, volumes), None);
     }
 
     #[test]

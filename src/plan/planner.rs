@@ -7,7 +7,7 @@
 //! the volume draws by their inputs.
 
 use super::Plan;
-use super::auto::AutoMemory;
+use super::auto::{AutoMemory, CostSource};
 use super::kept_frusta::KeptFrusta;
 use super::occlusion::DepthPyramid;
 use super::pass::PassTime;
@@ -77,9 +77,11 @@ pub struct Planner {
 }
 
 impl Planner {
-    /// Forgets everything learnt from the last scene.
+    /// Forgets everything learnt from the last scene (where costs come from is kept).
     pub fn forget(&mut self) {
+        let source = self.memory.cost_source().clone();
         *self = Planner::default();
+        self.memory.set_cost_source(source);
     }
 
     /// Drops the frusta kept across frames (`plan.keep_frusta`).
@@ -90,6 +92,11 @@ impl Planner {
     /// What `technique = auto` has measured so far.
     pub fn memory(&self) -> &AutoMemory {
         &self.memory
+    }
+
+    /// Where `technique = auto` takes its costs from (measured unless a caller supplies them).
+    pub fn set_cost_source(&mut self, source: CostSource) {
+        self.memory.set_cost_source(source);
     }
 
     /// Learns from a frame's pass times, for `technique = auto`.
@@ -253,6 +260,11 @@ impl Planner {
 
     /// Forgets the light's volume draws (their upload failed): the next frame makes them
     /// afresh.
+    /// Volume parts and depth fits kept for later frames.
+    pub fn held_volumes(&self) -> (usize, usize) {
+        self.volumes.held()
+    }
+
     pub fn forget_volume_draws(&mut self, light: usize) {
         self.volumes.forget_light(light);
     }

@@ -99,6 +99,9 @@ pub struct VolumeStats {
     /// three corners (`plan.cull_clipped`); a part left with none is not drawn. `quads` and
     /// `cap_triangles` count the drawn parts' triangles before this.
     pub triangles_clipped: usize,
+    /// Parts with triangles to draw: not off screen, not left empty by the build or by
+    /// `plan.cull_clipped`.
+    pub parts_drawn: usize,
     /// Mean share of the screen a drawn part's stencil draw is scissored to (1 without
     /// `plan.piece_scissor`).
     pub part_scissor_fraction: f64,
@@ -543,6 +546,12 @@ fn hash_box(b: &Aabb) -> u64 {
 }
 
 impl VolumePlanner {
+    /// Volume parts kept for later frames, all lights together, and depth fits kept.
+    pub fn held(&self) -> (usize, usize) {
+        let parts = self.lights.values().map(|l| l.meshes.len()).sum();
+        (parts, self.fits.len())
+    }
+
     /// Once a frame, before [`VolumePlanner::prepare`]: `same_depth` says the depth buffer
     /// (at the frame's size) is the last frame's, so the fits made for it still hold.
     pub fn begin_frame(&mut self, same_depth: bool) {
@@ -1023,6 +1032,7 @@ impl LightVolumeDraws {
         }
         total.hash(&mut layout);
         stats.depth_range = depth_range;
+        stats.parts_drawn = drawn;
         stats.part_scissor_fraction = if drawn == 0 {
             0.0
         } else {

@@ -124,6 +124,48 @@ pub fn compare_where(rendered: &Mask, reference: &Mask, include: impl Fn(usize) 
     c
 }
 
+/// How two masks of one light and view differ: in all, and outside the edge band.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize)]
+pub struct MaskDifference {
+    pub differing: usize,
+    /// Differing pixels not within 1 px of an edge (a change of value: lit, shadowed, not a
+    /// receiver) in both masks. Where a shadow or a receiver ends, two rasterisers may put the
+    /// edge a pixel apart (coverage rules, interpolation precision), and so may two ways of
+    /// drawing the same geometry (clipped or bounded volumes); away from the edges of both
+    /// masks, a difference is a decision of its own (a speck of acne, a leak) and counts.
+    pub outside_band: usize,
+}
+
+/// Whether (x, y) lies within 1 px of an edge of `m`: its 3×3 neighbourhood holds two values.
+fn near_edge(m: &Mask, x: u32, y: u32) -> bool {
+    let here = m.get(x, y);
+    (y.saturating_sub(1)..=(y + 1).min(m.height - 1))
+        .any(|yy| (x.saturating_sub(1)..=(x + 1).min(m.width - 1)).any(|xx| m.get(xx, yy) != here))
+}
+
+/// Compares two masks of the same light and frame size (e.g. one drawn on two GL paths).
+pub fn mask_difference(a: &Mask, b: &Mask) -> MaskDifference {
+    assert_eq!(
+        (a.width, a.height),
+        (b.width, b.height),
+        "masks of different sizes"
+    );
+    let mut d = MaskDifference::default();
+    for y in 0..a.height {
+        for x in 0..a.width {
+            let i = (y * a.width + x) as usize;
+            if a.values[i] == b.values[i] {
+                continue;
+            }
+            d.differing += 1;
+            if !(near_edge(a, x, y) && near_edge(b, x, y)) {
+                d.outside_band += 1;
+            }
+        }
+    }
+    d
+}
+
 /// How one pixel compares, worst first (the order in which lights' answers are merged).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord)]
 enum PixelError {
@@ -225,6 +267,29 @@ mod tests {
         // The band: columns 3-4 of every row, and (5,2) whose neighbours below are lit.
         assert_eq!(c.receivers_excl_boundary, 22 - 9);
         assert!((r.total_excl_boundary - 1.0 / 13.0).abs() < 1e-12);
+    }
+
+    #[test]
+    fn an_edge_a_pixel_apart_is_in_the_band_and_a_speck_is_not() {
+        // The shadow starts a column later in b, and the receiver ends a column later; b has
+        // an isolated speck of shadow at (1, 3) in a lit region.
+        let a = mask(&["LLLSSSSS..", "LLLSSSSS..", "LLLSSSSS..", "LLLSSSSS.."]);
+        let b = mask(&["LLLLSSSSS.", "LLLLSSSSS.", "LLLLSSSSS.", "LSLLSSSSS."]);
+        let d = mask_difference(&a, &b);
+        // Columns 3 and 8 of four rows differ at edges; the speck differs away from them.
+        assert_eq!(d.differing, 9);
+        assert_eq!(d.outside_band, 1);
+        assert_eq!(mask_difference(&a, &a), MaskDifference::default());
+        // A speck in the middle of a region, in one mask only, is never in the band.
+        let lit = mask(&["LLL", "LLL", "LLL"]);
+        let speck = mask(&["LLL", "LSL", "LLL"]);
+        assert_eq!(
+            mask_difference(&lit, &speck),
+            MaskDifference {
+                differing: 1,
+                outside_band: 1
+            }
+        );
     }
 
     #[test]

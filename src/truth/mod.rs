@@ -10,5 +10,8 @@ pub mod subdivision;
 
 pub use masks::{Tracing, compare_majority, majority, reference_mask};
 pub use measure::{ExactMasks, Measurement, exact_mask, measure, measure_with};
-pub use metrics::{Counts, Rates, compare, compare_where, error_image, error_image_all};
+pub use metrics::{
+    Counts, MaskDifference, Rates, compare, compare_where, error_image, error_image_all,
+    mask_difference,
+};
 pub use reference::{Blocker, Reference};

@@ -78,6 +78,11 @@ impl LiveError {
         }
     }
 
+    /// Frames sampled since the viewer started.
+    pub fn sampled_frames(&self) -> u64 {
+        self.frames
+    }
+
     /// Whether the reference is still being built.
     pub fn building(&self) -> bool {
         self.building.is_some()

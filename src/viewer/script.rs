@@ -15,6 +15,7 @@
 //! replay path.txt             # play a camera path, one pose per frame
 //! record path.txt             # record the camera's poses until `record stop`
 //! error                       # compute the error image against the exact reference, wait
+//! sampled 4                   # render until the live error has sampled 4 more frames
 //! screenshot out.png          # the window, panel and overlays included
 //! frame out.png               # the 3D view only (the renderer's frame)
 //! play off                    # the scene's motion (players, moving lights): on | off
@@ -71,6 +72,10 @@ pub enum Toggle {
 #[derive(Debug, Clone, PartialEq)]
 pub enum Command {
     Wait(usize),
+    /// Render until the live error (`overlay estimate on`) has sampled this many more frames:
+    /// how many frames that takes follows `estimate.budget` and the machine's speed, what the
+    /// script then reads does not.
+    Sampled(usize),
     Set(String),
     LightTechnique(usize, Option<crate::options::Technique>),
     Select(usize),
@@ -134,6 +139,7 @@ fn parse_line(line: &str) -> Result<Option<Command>, String> {
         } else {
             number(args.first())?
         }),
+        "sampled" => Command::Sampled(number(args.first())?),
         "set" => {
             if !rest.contains('=') {
                 return Err(format!("`set {rest}` is not key=value"));
@@ -244,7 +250,7 @@ mod tests {
         let s = parse(
             "# demo\nwait 3\nset technique=shadow_map\n\nlight 1 shadow_volume\nlight 0 default\n\
              view stencil  # counts\noverlay volumes\noverlay help off\nwalkthrough 2\n\
-             walkthrough off\ncamera 1 2 3 90 -5\nrecord stop\nscreenshot a b.png\nquit\n",
+             walkthrough off\ncamera 1 2 3 90 -5\nrecord stop\nscreenshot a b.png\nsampled 4\nquit\n",
         )
         .unwrap();
         assert_eq!(
@@ -262,6 +268,7 @@ mod tests {
                 Command::Camera([1.0, 2.0, 3.0, 90.0, -5.0]),
                 Command::Record(None),
                 Command::Screenshot("a b.png".into()),
+                Command::Sampled(4),
                 Command::Quit,
             ]
         );
@@ -277,6 +284,7 @@ mod tests {
             ("\n\nlight 0 magic", 3),
             ("frobnicate", 1),
             ("screenshot", 1),
+            ("sampled", 1),
         ] {
             assert_eq!(parse(text).unwrap_err().line, line, "{text}");
         }

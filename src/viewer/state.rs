@@ -56,6 +56,11 @@ pub enum Pending {
     Frame(PathBuf),
 }
 
+/// Frames a script's `sampled N` may render before it gives up: the live error samples a
+/// frame whenever its spending is under `estimate.budget` of the frames' time, so at a budget
+/// of 0.1 about one frame in ten where masks cost a frame (llvmpipe).
+const SAMPLED_FRAME_LIMIT: usize = 2000;
+
 pub struct ViewerState {
     pub scene: Arc<Scene>,
     pub options: Options,
@@ -87,6 +92,9 @@ pub struct ViewerState {
     pub error_result: Option<(u64, ErrorResult)>,
     /// A script's `error` waits for the job.
     error_blocks: bool,
+    /// A script's `sampled N` waits until the live error's sampled frames reach this count;
+    /// the frames it may render meanwhile.
+    wait_sampled: Option<(u64, usize)>,
     /// The last action's outcome, shown in the panel.
     pub status: String,
     pub quit: bool,
@@ -150,6 +158,7 @@ impl ViewerState {
             live_error: Default::default(),
             error_result: None,
             error_blocks: false,
+            wait_sampled: None,
             status: String::new(),
             quit: false,
             needs_upload: false,
@@ -441,10 +450,33 @@ impl ViewerState {
             }
             self.error_blocks = false;
         }
+        if let Some((target, frames_left)) = self.wait_sampled {
+            let sampled = self.live_error.sampled_frames();
+            if sampled < target {
+                if frames_left == 0 {
+                    return Err(format!(
+                        "`sampled`: after {SAMPLED_FRAME_LIMIT} frames the live error is still \
+                         {} sampled frames short (is estimate.budget 0?)",
+                        target - sampled
+                    ));
+                }
+                self.wait_sampled = Some((target, frames_left - 1));
+                return Ok(());
+            }
+            self.wait_sampled = None;
+        }
         while let Some(c) = self.script.pop_front() {
             match c {
                 Command::Wait(n) => {
                     self.wait = n.saturating_sub(1);
+                    return Ok(());
+                }
+                Command::Sampled(n) => {
+                    if !self.live_error.on {
+                        return Err("`sampled` needs the live error: `overlay estimate on`".into());
+                    }
+                    let target = self.live_error.sampled_frames() + n as u64;
+                    self.wait_sampled = Some((target, SAMPLED_FRAME_LIMIT));
                     return Ok(());
                 }
                 Command::Set(a) => {
@@ -526,7 +558,11 @@ impl ViewerState {
 
     /// Whether a script still has work (the window then renders continuously).
     pub fn scripted(&self) -> bool {
-        !self.script.is_empty() || self.wait > 0 || !self.replay.is_empty() || self.error_blocks
+        !self.script.is_empty()
+            || self.wait > 0
+            || !self.replay.is_empty()
+            || self.error_blocks
+            || self.wait_sampled.is_some()
     }
 }
 

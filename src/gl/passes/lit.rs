@@ -206,7 +206,7 @@ impl TexgenFrame {
         TexgenFrame {
             to_texgen_space: match kind {
                 TexgenSpace::EyeLinear => camera_view,
-                TexgenSpace::Light => Mat4::from_translation(-light),
+                TexgenSpace::Light | TexgenSpace::Fragment => Mat4::from_translation(-light),
             },
             kind,
             camera_view,
@@ -221,7 +221,7 @@ impl TexgenFrame {
                 view.texgen(&self.camera_view),
                 view.depth_texgen(&self.camera_view),
             ),
-            TexgenSpace::Light => (
+            TexgenSpace::Light | TexgenSpace::Fragment => (
                 view.texgen_relative(self.light),
                 view.depth_texgen_relative(self.light),
             ),

@@ -87,6 +87,8 @@ fn claim(
         ]);
         s.numbers
             .insert(format!("{}_ratio_{n}", lab.name), r.ratio_to_shadows_off);
+        s.numbers
+            .insert(format!("{}_error_{n}", lab.name), r.error.total);
         s.regenerate
             .push(lab.bench_command(&[o.as_str()], &format!("technique=none,{technique}")));
     }

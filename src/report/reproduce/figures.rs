@@ -420,6 +420,8 @@ fn fig13_14_stages(lab: &mut Lab) -> Result<Section, ReproduceError> {
         let rest = (frame - draw - copy).max(0.0);
         let share = (draw + copy) / frame;
         s.numbers.insert(format!("map_share_{i}"), share);
+        // The two ways of filling the map store the same depths: the same error.
+        s.numbers.insert(format!("error_{i}"), r.error.total);
         t.push(vec![
             r.label.clone(),
             format!("{draw:.2}"),
@@ -533,6 +535,8 @@ fn fig22_two_sided(lab: &mut Lab) -> Result<Section, ReproduceError> {
         let shading = (frame - volumes).max(0.0);
         s.numbers.insert(format!("frame_ms_{i}"), frame);
         s.numbers.insert(format!("volumes_ms_{i}"), volumes);
+        // One pass or two count the same volumes: the same error.
+        s.numbers.insert(format!("error_{i}"), r.error.total);
         t.push(vec![
             r.label.clone(),
             format!("{volumes:.2}"),
