@@ -59,7 +59,7 @@ pub enum Pending {
 /// Frames a script's `sampled N` may render before it gives up: the live error samples a
 /// frame whenever its spending is under `estimate.budget` of the frames' time, so at a budget
 /// of 0.1 about one frame in ten where masks cost a frame (llvmpipe).
-const SAMPLED_FRAME_LIMIT: usize = 2000;
+const SAMPLED_FRAME_LIMIT: usize = 500;
 
 pub struct ViewerState {
     pub scene: Arc<Scene>,
