@@ -14,6 +14,19 @@ fn shadowlab() -> Command {
     Command::new(env!("CARGO_BIN_EXE_shadowlab"))
 }
 
+/// `shadowlab render --set technique=T --out F`, to which a test adds its flags.
+fn render(technique: &str, out: &Path) -> Command {
+    let mut c = shadowlab();
+    c.args([
+        "render",
+        "--set",
+        &format!("technique={technique}"),
+        "--out",
+    ])
+    .arg(out);
+    c
+}
+
 fn temp(name: &str) -> PathBuf {
     let d = std::env::temp_dir().join(format!("shadowlab-cli-{}-{name}", std::process::id()));
     let _ = std::fs::remove_dir_all(&d);
@@ -87,14 +100,7 @@ fn render_with_masks_and_probes_gives_the_readme_figures() {
         let dir = temp(technique);
         let masks = dir.join("masks");
         let out = stdout_of(
-            shadowlab()
-                .args([
-                    "render",
-                    "--set",
-                    &format!("technique={technique}"),
-                    "--out",
-                ])
-                .arg(dir.join("frame.png"))
+            render(technique, &dir.join("frame.png"))
                 .arg("--mask")
                 .arg(&masks)
                 .output()
@@ -121,14 +127,7 @@ fn render_with_masks_and_probes_gives_the_readme_figures() {
         let shadowed = pixel_where(&mask, &reference, 96);
         let lit = pixel_where(&mask, &reference, 255);
         let probe = stdout_of(
-            shadowlab()
-                .args([
-                    "render",
-                    "--set",
-                    &format!("technique={technique}"),
-                    "--out",
-                ])
-                .arg(dir.join("probed.png"))
+            render(technique, &dir.join("probed.png"))
                 .args(["--probe", &format!("{},{}", shadowed.0, shadowed.1)])
                 .args(["--probe", &format!("{},{}", lit.0, lit.1)])
                 .output()
