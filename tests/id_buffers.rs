@@ -5,7 +5,10 @@
 
 mod common;
 
-use common::{Measured, Measurer, differing, load_asset, load_scene_file, options_with};
+use common::{
+    Measured, Measurer, differing, id_buffers_run_or_fall_back, load_asset, load_scene_file,
+    options_with,
+};
 use shadowlab::truth::Counts;
 
 const SM: &str = "technique=shadow_map";
@@ -33,6 +36,9 @@ fn id_and_priority_buffers_need_no_bias_on_the_grazing_light() {
         load_asset("assets/hard/grazing.toml").0,
         &options_with(&[SM]),
     );
+    if !id_buffers_run_or_fall_back(&mut m, case) {
+        return;
+    }
     let depth_bare = m.measure(&options_with(&[SM, "shadow_map.offset=false"]));
     let id = m.measure(&options_with(&[
         SM,
@@ -68,6 +74,9 @@ fn the_edge_filter_cures_edge_acne_and_shrinks_shadows_by_about_a_texel() {
     let case = "oa_dm1";
     let (scene, _, _) = load_scene_file("oa_dm1");
     let mut m = Measurer::new(scene, &options_with(&[SM]));
+    if !id_buffers_run_or_fall_back(&mut m, "edge filter") {
+        return;
+    }
     let mut shrink = Vec::new();
     for size in [512, 1024] {
         let sz = format!("shadow_map.size={size}");
@@ -111,6 +120,9 @@ fn the_edge_filter_cures_edge_acne_and_shrinks_shadows_by_about_a_texel() {
 fn eight_bit_triangle_ids_collide() {
     let (scene, _, _) = load_scene_file("oa_dm1");
     let mut m = Measurer::new(scene, &options_with(&[SM]));
+    if !id_buffers_run_or_fall_back(&mut m, "8-bit ids") {
+        return;
+    }
     let full = m.measure(&options_with(&[
         SM,
         "shadow_map.buffer=id",
@@ -150,6 +162,9 @@ fn mipmapped_priority_buffers_under_minification() {
         load_asset("assets/hard/thin_casters.toml").0,
         &options_with(&[SM]),
     );
+    if !id_buffers_run_or_fall_back(&mut m, "priority mips") {
+        return;
+    }
     let (size, w, h) = ("shadow_map.size=256", "width=640", "height=480");
     let flat = m.measure(&priority(size, w, h, false));
     let chain = m.measure(&priority(size, w, h, true));

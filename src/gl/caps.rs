@@ -391,14 +391,18 @@ pub fn probe(gl: &glow::Context, fb_depth_stencil: (i32, i32)) -> Caps {
         timer_detail,
         "CPU time around glFinish per pass",
     );
+    let (primitive_id, primitive_id_detail) = if es {
+        (
+            false,
+            "gl_PrimitiveID in fragment shaders (not in GLSL ES 3.00)".into(),
+        )
+    } else {
+        super::primitive_id_probe::primitive_id_works(gl)
+    };
     add(
         "primitive_id",
-        !es,
-        if es {
-            "gl_PrimitiveID in fragment shaders (not in GLSL ES 3.00)".into()
-        } else {
-            "gl_PrimitiveID in fragment shaders (GLSL 1.50)".into()
-        },
+        primitive_id,
+        primitive_id_detail,
         "depth maps (shadow_map.buffer = depth)",
     );
     let depth_tex = depth_texture_attachable(gl, glow::DEPTH_COMPONENT24, glow::UNSIGNED_INT);

@@ -13,6 +13,7 @@ pub mod id_tables;
 pub mod legacy;
 pub mod osmesa;
 pub mod passes;
+mod primitive_id_probe;
 pub mod priority_mips;
 pub mod program;
 pub mod renderer;

@@ -351,6 +351,45 @@ impl Measurer {
     }
 }
 
+/// Whether the GL behind `m` runs ID and priority buffers: they index their per-triangle tables
+/// by `gl_PrimitiveID` in fragment shaders, which the capability probe checks by drawing
+/// (Mesa 22.3's softpipe draws nothing with it). Where it does not, this asserts the documented
+/// fallback instead, for the test that asked: an ID-buffer frame lists `primitive_id` and
+/// decides as depth maps do; and says so.
+pub fn id_buffers_run_or_fall_back(m: &mut Measurer, what: &str) -> bool {
+    let asked = options_with(&["technique=shadow_map", "shadow_map.buffer=id"]);
+    let caps = m
+        .renderer()
+        .caps_for(&asked)
+        .unwrap_or_else(|e| panic!("{e}"));
+    if caps.has("primitive_id") {
+        return true;
+    }
+    let ids = m.measure(&asked);
+    let depth = m.measure(&options_with(&["technique=shadow_map"]));
+    assert!(
+        ids.frame
+            .fallbacks
+            .iter()
+            .any(|f| f.feature == "primitive_id"),
+        "{what}: the primitive_id fallback is not listed: {:?}",
+        ids.frame.fallbacks
+    );
+    for mask in &depth.frame.masks {
+        assert_masks_agree(mask, ids.mask(mask.light), true, what);
+    }
+    println!(
+        "{what}: this GL ({}) fails the primitive_id probe ({}): ID buffers fall back to \
+         depth maps, checked instead",
+        caps.renderer,
+        caps.features
+            .iter()
+            .find(|f| f.key == "primitive_id")
+            .map_or("", |f| f.detail.as_str())
+    );
+    false
+}
+
 /// The options the tests are written against: the library's defaults with every light
 /// unshadowed (`technique = none`) unless a test sets a technique. (The library's default
 /// is `auto`, for people; a test names what it tests.)
