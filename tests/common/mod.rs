@@ -343,6 +343,17 @@ impl Measurer {
             .unwrap_or_else(|e| panic!("{e}"));
         let g = frame.gbuffer.as_ref().unwrap();
         let m = self.exact.measure(&self.scene, g, &frame.masks);
+        // Every bound on an error passes on zero receivers: a frame whose masks hold none (a
+        // lit pass that drew nothing, as ID buffers on a GL without gl_PrimitiveID did) fails
+        // here instead.
+        assert!(
+            frame.masks.is_empty()
+                || frame
+                    .masks
+                    .iter()
+                    .any(|k| k.count(shadowlab::images::MaskValue::NotReceiver) < k.values.len()),
+            "no mask holds a receiver pixel: the frame's lit pass drew nothing"
+        );
         Measured {
             frame,
             per_light: m.per_light,
