@@ -12,7 +12,7 @@ cd "$(dirname "$0")/.."
 export GALLIUM_DRIVER=softpipe
 
 cargo build --release --quiet
-renderer=$(target/release/shadowlab info | sed -n 's/^renderer: *//p')
+renderer=$("${CARGO_TARGET_DIR:-target}/release/shadowlab" info | sed -n 's/^renderer: *//p')
 if [ "$renderer" != "softpipe" ]; then
     echo "error: GALLIUM_DRIVER=softpipe gave renderer '$renderer', not softpipe (Debian: libgl1-mesa-dri)" >&2
     exit 1
