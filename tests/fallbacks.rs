@@ -74,13 +74,30 @@ fn every_disabled_feature_falls_back_and_renders_what_its_fallback_renders() {
             all.extend_from_slice(extra);
             options_with(&all)
         };
+        let gl_has = m
+            .renderer()
+            .caps_for(&with(asked, &[]))
+            .unwrap_or_else(|e| panic!("{e}"))
+            .has(feature);
         let as_asked = m.measure(&with(asked, &[]));
         let hidden = m.measure(&with(asked, &[&disable]));
         let direct = m.measure(&with(fallback, &[]));
-        // Nothing hidden on this GL: nothing replaced (every feature here is one llvmpipe and
-        // current GPUs have; a GL without one would fall back here too, and say so).
+        // Nothing hidden: the frame replaces nothing where this GL has the feature, and lists
+        // the same fallback where it lacks it (softpipe fails the primitive_id probe). Hiding a
+        // missing feature then adds nothing, and the frame as asked must already be the fallback.
         let own: Vec<_> = as_asked.frame.fallbacks.iter().map(|f| f.feature).collect();
-        assert!(!own.contains(&feature), "{feature}: {own:?}");
+        assert_eq!(own.contains(&feature), !gl_has, "{feature}: {own:?}");
+        if !gl_has {
+            println!("this GL lacks {feature}: its own fallback checked");
+            for l in 0..2 {
+                assert_eq!(
+                    as_asked.mask(l).values,
+                    direct.mask(l).values,
+                    "{feature} (missing): light {l}"
+                );
+            }
+        }
+        let replaced = if gl_has { replaced } else { 0 };
         // What hiding the feature added: this GL's own missing features (llvmpipe lacks
         // EXT_depth_bounds_test) fall back in both frames.
         let taken: Vec<_> = hidden
