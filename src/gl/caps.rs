@@ -155,25 +155,12 @@ fn timer_query_check(gl: &glow::Context) -> (bool, String) {
         ) else {
             return (false, "query or framebuffer objects unavailable".into());
         };
-        gl.bind_texture(glow::TEXTURE_2D, Some(tex));
-        gl.tex_image_2d(
-            glow::TEXTURE_2D,
-            0,
-            glow::RGBA8 as i32,
+        super::scratch::bind_colour_target(
+            gl,
+            tex,
+            fbo,
             SIDE,
-            SIDE,
-            0,
-            glow::RGBA,
-            glow::UNSIGNED_BYTE,
-            glow::PixelUnpackData::Slice(None),
-        );
-        gl.bind_framebuffer(glow::FRAMEBUFFER, Some(fbo));
-        gl.framebuffer_texture_2d(
-            glow::FRAMEBUFFER,
-            glow::COLOR_ATTACHMENT0,
-            glow::TEXTURE_2D,
-            Some(tex),
-            0,
+            (glow::RGBA8, glow::RGBA, glow::UNSIGNED_BYTE),
         );
         gl.viewport(0, 0, SIDE, SIDE);
         let measure = || {

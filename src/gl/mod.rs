@@ -17,6 +17,7 @@ mod primitive_id_probe;
 pub mod priority_mips;
 pub mod program;
 pub mod renderer;
+mod scratch;
 pub mod shadow_maps;
 pub mod target;
 pub mod timing;

@@ -53,25 +53,12 @@ pub fn primitive_id_works(gl: &glow::Context) -> (bool, String) {
         gl.buffer_data_u8_slice(glow::ARRAY_BUFFER, &bytes, glow::STATIC_DRAW);
         gl.enable_vertex_attrib_array(0);
         gl.vertex_attrib_pointer_f32(0, 2, glow::FLOAT, false, 8, 0);
-        gl.bind_texture(glow::TEXTURE_2D, Some(tex));
-        gl.tex_image_2d(
-            glow::TEXTURE_2D,
-            0,
-            glow::RGBA32F as i32,
+        super::scratch::bind_colour_target(
+            gl,
+            tex,
+            fbo,
             SIDE,
-            SIDE,
-            0,
-            glow::RGBA,
-            glow::FLOAT,
-            glow::PixelUnpackData::Slice(None),
-        );
-        gl.bind_framebuffer(glow::FRAMEBUFFER, Some(fbo));
-        gl.framebuffer_texture_2d(
-            glow::FRAMEBUFFER,
-            glow::COLOR_ATTACHMENT0,
-            glow::TEXTURE_2D,
-            Some(tex),
-            0,
+            (glow::RGBA32F, glow::RGBA, glow::FLOAT),
         );
         gl.draw_buffers(&[glow::COLOR_ATTACHMENT0]);
         gl.viewport(0, 0, SIDE, SIDE);
