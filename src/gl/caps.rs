@@ -378,14 +378,7 @@ pub fn probe(gl: &glow::Context, fb_depth_stencil: (i32, i32)) -> Caps {
         timer_detail,
         "CPU time around glFinish per pass",
     );
-    let (primitive_id, primitive_id_detail) = if es {
-        (
-            false,
-            "gl_PrimitiveID in fragment shaders (not in GLSL ES 3.00)".into(),
-        )
-    } else {
-        super::primitive_id_probe::primitive_id_works(gl)
-    };
+    let (primitive_id, primitive_id_detail) = super::primitive_id_probe::primitive_id_works(gl, es);
     add(
         "primitive_id",
         primitive_id,

@@ -25,8 +25,15 @@ void main() {
 const SIDE: i32 = 8;
 
 /// Whether the fragments of two triangles read their own primitive IDs (0 and 1) and the
-/// varying as interpolated, with what was seen where not.
-pub fn primitive_id_works(gl: &glow::Context) -> (bool, String) {
+/// varying as interpolated, with what was seen where not. GLSL ES 3.00 has no `gl_PrimitiveID`:
+/// on ES (`es`) nothing is drawn.
+pub fn primitive_id_works(gl: &glow::Context, es: bool) -> (bool, String) {
+    if es {
+        return (
+            false,
+            "gl_PrimitiveID in fragment shaders (not in GLSL ES 3.00)".into(),
+        );
+    }
     // SAFETY: a scratch program, buffer, vertex array, texture and framebuffer are created,
     // drawn with, read back and deleted here; the bindings they replace are reset to 0.
     unsafe {
