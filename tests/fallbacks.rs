@@ -11,7 +11,7 @@ const SM: &str = "technique=shadow_map";
 const SV: &str = "technique=shadow_volume";
 
 /// (feature, the options that need it, the fallback they must equal, options replaced)
-const CASES: [(&str, &[&str], &[&str], usize); 7] = [
+const CASES: [(&str, &[&str], &[&str], usize); 8] = [
     (
         "render_to_depth_texture",
         &[SM, "shadow_map.depth_source=fbo"],
@@ -60,6 +60,12 @@ const CASES: [(&str, &[&str], &[&str], usize); 7] = [
         "primitive_id",
         &[SM, "shadow_map.buffer=id"],
         &[SM, "shadow_map.buffer=depth"],
+        1,
+    ),
+    (
+        "offset_per_fragment",
+        &["technique=psm"],
+        &["technique=psm", "shadow_map.offset_factor=10"],
         1,
     ),
 ];

@@ -51,8 +51,10 @@ fn view(scene: Option<&str>, script: &str, name: &str) -> String {
     std::fs::create_dir_all(&dir).unwrap();
     let script_path = dir.join("script.txt");
     std::fs::write(&script_path, script).unwrap();
+    // A guard against a hung viewer, not a measure of it: oa_dm1's script ran past 5 minutes
+    // under softpipe on 2 cores.
     let mut cmd = Command::new("timeout");
-    cmd.args(["300", "xvfb-run", "-a", "-s", "-screen 0 1280x800x24"])
+    cmd.args(["1800", "xvfb-run", "-a", "-s", "-screen 0 1280x800x24"])
         .arg(env!("CARGO_BIN_EXE_shadowlab"))
         .arg("view")
         .arg("--script")

@@ -385,6 +385,14 @@ pub fn probe(gl: &glow::Context, fb_depth_stencil: (i32, i32)) -> Caps {
         primitive_id_detail,
         "depth maps (shadow_map.buffer = depth)",
     );
+    let (offset_per_fragment, offset_detail) = super::offset_probe::offset_per_fragment(gl, es);
+    add(
+        "offset_per_fragment",
+        offset_per_fragment,
+        offset_detail,
+        "shadow_map.offset_factor at least 10 for warped maps (psm, tsm) and frusta, which \
+         are fitted tightly in depth",
+    );
     let depth_tex = depth_texture_attachable(gl, glow::DEPTH_COMPONENT24, glow::UNSIGNED_INT);
     add(
         "render_to_depth_texture",

@@ -11,6 +11,7 @@ pub mod fixed;
 pub mod fragments;
 pub mod id_tables;
 pub mod legacy;
+mod offset_probe;
 pub mod osmesa;
 pub mod passes;
 mod primitive_id_probe;

@@ -37,7 +37,7 @@ pub fn primitive_id_works(gl: &glow::Context, es: bool) -> (bool, String) {
     // SAFETY: a scratch program, buffer, vertex array, texture and framebuffer are created,
     // drawn with, read back and deleted here; the bindings they replace are reset to 0.
     unsafe {
-        let Some(program) = program(gl) else {
+        let Some(program) = super::scratch::link(gl, VERTEX, FRAGMENT) else {
             return (
                 false,
                 "a fragment shader reading gl_PrimitiveID did not link".into(),
@@ -139,40 +139,6 @@ fn judge(pixels: &[f32]) -> (bool, String) {
         true,
         "gl_PrimitiveID in fragment shaders (GLSL 1.50), checked by drawing".into(),
     )
-}
-
-/// The probe's program, or None where it does not compile or link.
-unsafe fn program(gl: &glow::Context) -> Option<glow::Program> {
-    // SAFETY: the caller's promise; shaders are deleted once linked (or not).
-    unsafe {
-        let program = gl.create_program().ok()?;
-        let mut shaders = Vec::new();
-        for (kind, source) in [
-            (glow::VERTEX_SHADER, VERTEX),
-            (glow::FRAGMENT_SHADER, FRAGMENT),
-        ] {
-            let Ok(shader) = gl.create_shader(kind) else {
-                gl.delete_program(program);
-                return None;
-            };
-            gl.shader_source(shader, source);
-            gl.compile_shader(shader);
-            gl.attach_shader(program, shader);
-            shaders.push(shader);
-        }
-        gl.link_program(program);
-        let linked = gl.get_program_link_status(program);
-        for s in shaders {
-            gl.detach_shader(program, s);
-            gl.delete_shader(s);
-        }
-        if linked {
-            Some(program)
-        } else {
-            gl.delete_program(program);
-            None
-        }
-    }
 }
 
 #[cfg(test)]

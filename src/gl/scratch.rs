@@ -1,5 +1,5 @@
-//! Scratch render targets for the capability probes: a square colour texture attached to a
-//! framebuffer, which the probes draw into, read or time, and delete.
+//! Scratch objects for the capability probes: their programs, and a square colour texture
+//! attached to a framebuffer, which the probes draw into, read or time, and delete.
 
 use glow::HasContext;
 
@@ -37,5 +37,47 @@ pub(super) unsafe fn bind_colour_target(
             Some(tex),
             0,
         );
+    }
+}
+
+/// A probe's program from `vertex` and `fragment` sources, or None where it does not compile
+/// or link.
+///
+/// # Safety
+/// `gl`'s context is current.
+pub(super) unsafe fn link(
+    gl: &glow::Context,
+    vertex: &str,
+    fragment: &str,
+) -> Option<glow::Program> {
+    // SAFETY: the caller's promise; shaders are deleted once linked (or not).
+    unsafe {
+        let program = gl.create_program().ok()?;
+        let mut shaders = Vec::new();
+        for (kind, source) in [
+            (glow::VERTEX_SHADER, vertex),
+            (glow::FRAGMENT_SHADER, fragment),
+        ] {
+            let Ok(shader) = gl.create_shader(kind) else {
+                gl.delete_program(program);
+                return None;
+            };
+            gl.shader_source(shader, source);
+            gl.compile_shader(shader);
+            gl.attach_shader(program, shader);
+            shaders.push(shader);
+        }
+        gl.link_program(program);
+        let linked = gl.get_program_link_status(program);
+        for s in shaders {
+            gl.detach_shader(program, s);
+            gl.delete_shader(s);
+        }
+        if linked {
+            Some(program)
+        } else {
+            gl.delete_program(program);
+            None
+        }
     }
 }
