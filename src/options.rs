@@ -1032,7 +1032,9 @@ define_options! {
         pcf_size: u32 = 5, in 2 ..= 15;
         /// Apply glPolygonOffset at all.
         offset: bool = true;
-        /// glPolygonOffset factor (thesis 2.2.8: 1.1, after Kilgard).
+        /// glPolygonOffset factor (thesis 2.2.8: 1.1, after Kilgard). Raised to 10 for warped
+        /// maps and frusta where the GL adds the offset per vertex (`offset_per_fragment`
+        /// missing in `info`: softpipe), and the frame lists the fallback.
         offset_factor: f32 = 1.1, in 0.0 ..= 1000.0;
         /// glPolygonOffset units (thesis 2.2.8: 4).
         offset_units: f32 = 4.0, in 0.0 ..= 100000.0;

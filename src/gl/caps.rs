@@ -155,12 +155,12 @@ fn timer_query_check(gl: &glow::Context) -> (bool, String) {
         ) else {
             return (false, "query or framebuffer objects unavailable".into());
         };
-        super::scratch::bind_colour_target(
+        super::scratch::bind_target(
             gl,
-            tex,
-            fbo,
+            (tex, fbo),
             SIDE,
             (glow::RGBA8, glow::RGBA, glow::UNSIGNED_BYTE),
+            glow::COLOR_ATTACHMENT0,
         );
         gl.viewport(0, 0, SIDE, SIDE);
         let measure = || {

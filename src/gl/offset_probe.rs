@@ -8,6 +8,7 @@
 //! texture and reads the offset back at two pixels: per fragment it is the same at both; per
 //! vertex the pixel nearer the vertex that went past 1 gets less.
 
+use super::scratch::ScratchDraw;
 use glow::HasContext;
 
 const VERTEX: &str = "#version 330 core
@@ -52,40 +53,19 @@ pub fn offset_per_fragment(gl: &glow::Context, es: bool) -> (bool, String) {
         let Some(program) = super::scratch::link(gl, VERTEX, FRAGMENT) else {
             return (false, "the probe's program did not link".into());
         };
-        let (Ok(vao), Ok(vbo), Ok(tex), Ok(fbo)) = (
-            gl.create_vertex_array(),
-            gl.create_buffer(),
-            gl.create_texture(),
-            gl.create_framebuffer(),
-        ) else {
-            gl.delete_program(program);
+        let Some(draw) = ScratchDraw::new(gl, program, &CORNERS, 3) else {
             return (false, "scratch objects unavailable".into());
         };
-        let bytes: Vec<u8> = CORNERS.iter().flat_map(|c| c.to_le_bytes()).collect();
-        gl.bind_vertex_array(Some(vao));
-        gl.bind_buffer(glow::ARRAY_BUFFER, Some(vbo));
-        gl.buffer_data_u8_slice(glow::ARRAY_BUFFER, &bytes, glow::STATIC_DRAW);
-        gl.enable_vertex_attrib_array(0);
-        gl.vertex_attrib_pointer_f32(0, 3, glow::FLOAT, false, 12, 0);
-        gl.bind_texture(glow::TEXTURE_2D, Some(tex));
-        gl.tex_image_2d(
-            glow::TEXTURE_2D,
-            0,
-            glow::DEPTH_COMPONENT24 as i32,
+        super::scratch::bind_target(
+            gl,
+            (draw.tex, draw.fbo),
             SIDE,
-            SIDE,
-            0,
-            glow::DEPTH_COMPONENT,
-            glow::UNSIGNED_INT,
-            glow::PixelUnpackData::Slice(None),
-        );
-        gl.bind_framebuffer(glow::FRAMEBUFFER, Some(fbo));
-        gl.framebuffer_texture_2d(
-            glow::FRAMEBUFFER,
+            (
+                glow::DEPTH_COMPONENT24,
+                glow::DEPTH_COMPONENT,
+                glow::UNSIGNED_INT,
+            ),
             glow::DEPTH_ATTACHMENT,
-            glow::TEXTURE_2D,
-            Some(tex),
-            0,
         );
         gl.draw_buffers(&[glow::NONE]);
         gl.read_buffer(glow::NONE);
@@ -133,16 +113,7 @@ pub fn offset_per_fragment(gl: &glow::Context, es: bool) -> (bool, String) {
         let error = gl.get_error();
         gl.disable(glow::POLYGON_OFFSET_FILL);
         gl.depth_func(glow::LESS);
-        gl.use_program(None);
-        gl.bind_framebuffer(glow::FRAMEBUFFER, None);
-        gl.bind_texture(glow::TEXTURE_2D, None);
-        gl.bind_buffer(glow::ARRAY_BUFFER, None);
-        gl.bind_vertex_array(None);
-        gl.delete_framebuffer(fbo);
-        gl.delete_texture(tex);
-        gl.delete_buffer(vbo);
-        gl.delete_vertex_array(vao);
-        gl.delete_program(program);
+        draw.delete(gl);
         if error != glow::NO_ERROR {
             return (false, format!("GL error 0x{error:x} during the check"));
         }

@@ -4,6 +4,7 @@
 //! such a shader and draws nothing right: the probe draws two triangles and reads back what the
 //! fragments saw.
 
+use super::scratch::ScratchDraw;
 use glow::HasContext;
 
 const VERTEX: &str = "#version 330 core
@@ -43,29 +44,17 @@ pub fn primitive_id_works(gl: &glow::Context, es: bool) -> (bool, String) {
                 "a fragment shader reading gl_PrimitiveID did not link".into(),
             );
         };
-        let (Ok(vao), Ok(vbo), Ok(tex), Ok(fbo)) = (
-            gl.create_vertex_array(),
-            gl.create_buffer(),
-            gl.create_texture(),
-            gl.create_framebuffer(),
-        ) else {
-            gl.delete_program(program);
-            return (false, "scratch objects unavailable".into());
-        };
         // Two triangles splitting the square along its diagonal: 0 below it, 1 above.
         let corners: [f32; 12] = [-1., -1., 1., -1., 1., 1., -1., -1., 1., 1., -1., 1.];
-        let bytes: Vec<u8> = corners.iter().flat_map(|c| c.to_le_bytes()).collect();
-        gl.bind_vertex_array(Some(vao));
-        gl.bind_buffer(glow::ARRAY_BUFFER, Some(vbo));
-        gl.buffer_data_u8_slice(glow::ARRAY_BUFFER, &bytes, glow::STATIC_DRAW);
-        gl.enable_vertex_attrib_array(0);
-        gl.vertex_attrib_pointer_f32(0, 2, glow::FLOAT, false, 8, 0);
-        super::scratch::bind_colour_target(
+        let Some(draw) = ScratchDraw::new(gl, program, &corners, 2) else {
+            return (false, "scratch objects unavailable".into());
+        };
+        super::scratch::bind_target(
             gl,
-            tex,
-            fbo,
+            (draw.tex, draw.fbo),
             SIDE,
             (glow::RGBA32F, glow::RGBA, glow::FLOAT),
+            glow::COLOR_ATTACHMENT0,
         );
         gl.draw_buffers(&[glow::COLOR_ATTACHMENT0]);
         gl.viewport(0, 0, SIDE, SIDE);
@@ -93,16 +82,7 @@ pub fn primitive_id_works(gl: &glow::Context, es: bool) -> (bool, String) {
             glow::PixelPackData::Slice(Some(out)),
         );
         let error = gl.get_error();
-        gl.use_program(None);
-        gl.bind_framebuffer(glow::FRAMEBUFFER, None);
-        gl.bind_texture(glow::TEXTURE_2D, None);
-        gl.bind_buffer(glow::ARRAY_BUFFER, None);
-        gl.bind_vertex_array(None);
-        gl.delete_framebuffer(fbo);
-        gl.delete_texture(tex);
-        gl.delete_buffer(vbo);
-        gl.delete_vertex_array(vao);
-        gl.delete_program(program);
+        draw.delete(gl);
         if error != glow::NO_ERROR {
             return (false, format!("GL error 0x{error:x} during the check"));
         }

@@ -1,19 +1,19 @@
-//! Scratch objects for the capability probes: their programs, and a square colour texture
+//! Scratch objects for the capability probes: their programs, vertices, and a square texture
 //! attached to a framebuffer, which the probes draw into, read or time, and delete.
 
 use glow::HasContext;
 
-/// Allocates `tex` as a `side`×`side` colour texture of `internal_format` (uploaded from
-/// nothing as `format`/`ty`), attaches it to `fbo` as colour attachment 0 and leaves both bound.
+/// Allocates `tex` as a `side`×`side` texture of `internal_format` (uploaded from nothing as
+/// `format`/`ty`), attaches it to `fbo` at `attachment` and leaves both bound.
 ///
 /// # Safety
 /// `tex` and `fbo` are live objects of `gl`'s current context.
-pub(super) unsafe fn bind_colour_target(
+pub(super) unsafe fn bind_target(
     gl: &glow::Context,
-    tex: glow::Texture,
-    fbo: glow::Framebuffer,
+    (tex, fbo): (glow::Texture, glow::Framebuffer),
     side: i32,
     (internal_format, format, ty): (u32, u32, u32),
+    attachment: u32,
 ) {
     // SAFETY: the caller passes live objects of the current context.
     unsafe {
@@ -32,11 +32,81 @@ pub(super) unsafe fn bind_colour_target(
         gl.bind_framebuffer(glow::FRAMEBUFFER, Some(fbo));
         gl.framebuffer_texture_2d(
             glow::FRAMEBUFFER,
-            glow::COLOR_ATTACHMENT0,
+            attachment,
             glow::TEXTURE_2D,
             Some(tex),
             0,
         );
+    }
+}
+
+/// A drawing probe's objects: its program, a vertex array of positions in attribute 0, and a
+/// texture and framebuffer to draw into.
+pub(super) struct ScratchDraw {
+    pub program: glow::Program,
+    pub tex: glow::Texture,
+    pub fbo: glow::Framebuffer,
+    vao: glow::VertexArray,
+    vbo: glow::Buffer,
+}
+
+impl ScratchDraw {
+    /// Creates them, with `positions` (`components` floats a vertex) uploaded and bound; the
+    /// program stays unbound. None where an object cannot be created (the program is deleted).
+    ///
+    /// # Safety
+    /// `gl`'s context is current; `program` is one of its programs.
+    pub unsafe fn new(
+        gl: &glow::Context,
+        program: glow::Program,
+        positions: &[f32],
+        components: i32,
+    ) -> Option<ScratchDraw> {
+        // SAFETY: the caller's promise; what is created here is deleted by `delete`.
+        unsafe {
+            let (Ok(vao), Ok(vbo), Ok(tex), Ok(fbo)) = (
+                gl.create_vertex_array(),
+                gl.create_buffer(),
+                gl.create_texture(),
+                gl.create_framebuffer(),
+            ) else {
+                gl.delete_program(program);
+                return None;
+            };
+            let bytes: Vec<u8> = positions.iter().flat_map(|c| c.to_le_bytes()).collect();
+            gl.bind_vertex_array(Some(vao));
+            gl.bind_buffer(glow::ARRAY_BUFFER, Some(vbo));
+            gl.buffer_data_u8_slice(glow::ARRAY_BUFFER, &bytes, glow::STATIC_DRAW);
+            gl.enable_vertex_attrib_array(0);
+            gl.vertex_attrib_pointer_f32(0, components, glow::FLOAT, false, 4 * components, 0);
+            Some(ScratchDraw {
+                program,
+                tex,
+                fbo,
+                vao,
+                vbo,
+            })
+        }
+    }
+
+    /// Resets the bindings these replaced to 0 and deletes them.
+    ///
+    /// # Safety
+    /// `gl` is the context they were created in, current.
+    pub unsafe fn delete(self, gl: &glow::Context) {
+        // SAFETY: the caller's promise.
+        unsafe {
+            gl.use_program(None);
+            gl.bind_framebuffer(glow::FRAMEBUFFER, None);
+            gl.bind_texture(glow::TEXTURE_2D, None);
+            gl.bind_buffer(glow::ARRAY_BUFFER, None);
+            gl.bind_vertex_array(None);
+            gl.delete_framebuffer(self.fbo);
+            gl.delete_texture(self.tex);
+            gl.delete_buffer(self.vbo);
+            gl.delete_vertex_array(self.vao);
+            gl.delete_program(self.program);
+        }
     }
 }
 
