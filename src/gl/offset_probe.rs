@@ -8,7 +8,7 @@
 //! texture and reads the offset back at two pixels: per fragment it is the same at both; per
 //! vertex the pixel nearer the vertex that went past 1 gets less.
 
-use super::scratch::ScratchDraw;
+use super::scratch::{ScratchDraw, TargetSpec};
 use glow::HasContext;
 
 const VERTEX: &str = "#version 330 core
@@ -50,26 +50,21 @@ pub fn offset_per_fragment(gl: &glow::Context, es: bool) -> (bool, String) {
     // SAFETY: a scratch program, buffer, vertex array, texture and framebuffer are created,
     // drawn with, read back and deleted here; the bindings they replace are reset to 0.
     unsafe {
-        let Some(program) = super::scratch::link(gl, VERTEX, FRAGMENT) else {
-            return (false, "the probe's program did not link".into());
-        };
-        let Some(draw) = ScratchDraw::new(gl, program, &CORNERS, 3) else {
-            return (false, "scratch objects unavailable".into());
-        };
-        super::scratch::bind_target(
-            gl,
-            (draw.tex, draw.fbo),
-            SIDE,
-            (
+        let target = TargetSpec {
+            side: SIDE,
+            storage: (
                 glow::DEPTH_COMPONENT24,
                 glow::DEPTH_COMPONENT,
                 glow::UNSIGNED_INT,
             ),
-            glow::DEPTH_ATTACHMENT,
-        );
+            attachment: glow::DEPTH_ATTACHMENT,
+        };
+        let draw = match ScratchDraw::open(gl, (VERTEX, FRAGMENT), (&CORNERS, 3), &target) {
+            Ok(draw) => draw,
+            Err(why) => return (false, format!("the polygon offset probe: {why}")),
+        };
         gl.draw_buffers(&[glow::NONE]);
         gl.read_buffer(glow::NONE);
-        gl.viewport(0, 0, SIDE, SIDE);
         for cap in [
             glow::STENCIL_TEST,
             glow::CULL_FACE,
@@ -81,7 +76,7 @@ pub fn offset_per_fragment(gl: &glow::Context, es: bool) -> (bool, String) {
         gl.enable(glow::DEPTH_TEST);
         gl.depth_func(glow::ALWAYS);
         gl.depth_mask(true);
-        gl.use_program(Some(program));
+        gl.use_program(Some(draw.program));
         let depth = |offset: bool| {
             if offset {
                 gl.enable(glow::POLYGON_OFFSET_FILL);
@@ -92,21 +87,7 @@ pub fn offset_per_fragment(gl: &glow::Context, es: bool) -> (bool, String) {
             gl.clear_depth(1.0);
             gl.clear(glow::DEPTH_BUFFER_BIT);
             gl.draw_arrays(glow::TRIANGLES, 0, 3);
-            let mut pixels = vec![0f32; (SIDE * SIDE) as usize];
-            let out: &mut [u8] = std::slice::from_raw_parts_mut(
-                pixels.as_mut_ptr().cast::<u8>(),
-                pixels.len() * std::mem::size_of::<f32>(),
-            );
-            gl.read_pixels(
-                0,
-                0,
-                SIDE,
-                SIDE,
-                glow::DEPTH_COMPONENT,
-                glow::FLOAT,
-                glow::PixelPackData::Slice(Some(out)),
-            );
-            pixels
+            draw.read_floats(gl, glow::DEPTH_COMPONENT, 1)
         };
         let plain = depth(false);
         let offset = depth(true);

@@ -4,7 +4,7 @@
 //! such a shader and draws nothing right: the probe draws two triangles and reads back what the
 //! fragments saw.
 
-use super::scratch::ScratchDraw;
+use super::scratch::{ScratchDraw, TargetSpec};
 use glow::HasContext;
 
 const VERTEX: &str = "#version 330 core
@@ -38,26 +38,23 @@ pub fn primitive_id_works(gl: &glow::Context, es: bool) -> (bool, String) {
     // SAFETY: a scratch program, buffer, vertex array, texture and framebuffer are created,
     // drawn with, read back and deleted here; the bindings they replace are reset to 0.
     unsafe {
-        let Some(program) = super::scratch::link(gl, VERTEX, FRAGMENT) else {
-            return (
-                false,
-                "a fragment shader reading gl_PrimitiveID did not link".into(),
-            );
-        };
         // Two triangles splitting the square along its diagonal: 0 below it, 1 above.
         let corners: [f32; 12] = [-1., -1., 1., -1., 1., 1., -1., -1., 1., 1., -1., 1.];
-        let Some(draw) = ScratchDraw::new(gl, program, &corners, 2) else {
-            return (false, "scratch objects unavailable".into());
+        let target = TargetSpec {
+            side: SIDE,
+            storage: (glow::RGBA32F, glow::RGBA, glow::FLOAT),
+            attachment: glow::COLOR_ATTACHMENT0,
         };
-        super::scratch::bind_target(
-            gl,
-            (draw.tex, draw.fbo),
-            SIDE,
-            (glow::RGBA32F, glow::RGBA, glow::FLOAT),
-            glow::COLOR_ATTACHMENT0,
-        );
+        let draw = match ScratchDraw::open(gl, (VERTEX, FRAGMENT), (&corners, 2), &target) {
+            Ok(draw) => draw,
+            Err(why) => {
+                return (
+                    false,
+                    format!("a fragment shader reading gl_PrimitiveID: {why}"),
+                );
+            }
+        };
         gl.draw_buffers(&[glow::COLOR_ATTACHMENT0]);
-        gl.viewport(0, 0, SIDE, SIDE);
         gl.disable(glow::DEPTH_TEST);
         gl.disable(glow::STENCIL_TEST);
         gl.disable(glow::CULL_FACE);
@@ -65,22 +62,9 @@ pub fn primitive_id_works(gl: &glow::Context, es: bool) -> (bool, String) {
         gl.disable(glow::SCISSOR_TEST);
         gl.clear_color(-1.0, -1.0, -1.0, 0.0);
         gl.clear(glow::COLOR_BUFFER_BIT);
-        gl.use_program(Some(program));
+        gl.use_program(Some(draw.program));
         gl.draw_arrays(glow::TRIANGLES, 0, 6);
-        let mut pixels = vec![0f32; (SIDE * SIDE * 4) as usize];
-        let out: &mut [u8] = std::slice::from_raw_parts_mut(
-            pixels.as_mut_ptr().cast::<u8>(),
-            pixels.len() * std::mem::size_of::<f32>(),
-        );
-        gl.read_pixels(
-            0,
-            0,
-            SIDE,
-            SIDE,
-            glow::RGBA,
-            glow::FLOAT,
-            glow::PixelPackData::Slice(Some(out)),
-        );
+        let pixels = draw.read_floats(gl, glow::RGBA, 4);
         let error = gl.get_error();
         draw.delete(gl);
         if error != glow::NO_ERROR {

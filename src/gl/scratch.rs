@@ -44,26 +44,37 @@ pub(super) unsafe fn bind_target(
 /// texture and framebuffer to draw into.
 pub(super) struct ScratchDraw {
     pub program: glow::Program,
-    pub tex: glow::Texture,
-    pub fbo: glow::Framebuffer,
+    tex: glow::Texture,
+    fbo: glow::Framebuffer,
     vao: glow::VertexArray,
     vbo: glow::Buffer,
+    side: i32,
+}
+
+/// What a drawing probe draws into: a square texture `side` pixels wide, stored as
+/// (internal format, format, type), attached at `attachment`.
+pub(super) struct TargetSpec {
+    pub side: i32,
+    pub storage: (u32, u32, u32),
+    pub attachment: u32,
 }
 
 impl ScratchDraw {
-    /// Creates them, with `positions` (`components` floats a vertex) uploaded and bound; the
-    /// program stays unbound. None where an object cannot be created (the program is deleted).
+    /// Links `program` from its (vertex, fragment) sources, uploads `positions` (`components`
+    /// floats a vertex) and binds them, and binds a `target` texture in a framebuffer; the
+    /// program stays unbound. Where something cannot be made, says what and leaves nothing.
     ///
     /// # Safety
-    /// `gl`'s context is current; `program` is one of its programs.
-    pub unsafe fn new(
+    /// `gl`'s context is current.
+    pub unsafe fn open(
         gl: &glow::Context,
-        program: glow::Program,
-        positions: &[f32],
-        components: i32,
-    ) -> Option<ScratchDraw> {
+        (vertex, fragment): (&str, &str),
+        (positions, components): (&[f32], i32),
+        target: &TargetSpec,
+    ) -> Result<ScratchDraw, &'static str> {
         // SAFETY: the caller's promise; what is created here is deleted by `delete`.
         unsafe {
+            let program = link(gl, vertex, fragment).ok_or("its program did not link")?;
             let (Ok(vao), Ok(vbo), Ok(tex), Ok(fbo)) = (
                 gl.create_vertex_array(),
                 gl.create_buffer(),
@@ -71,7 +82,7 @@ impl ScratchDraw {
                 gl.create_framebuffer(),
             ) else {
                 gl.delete_program(program);
-                return None;
+                return Err("scratch objects unavailable");
             };
             let bytes: Vec<u8> = positions.iter().flat_map(|c| c.to_le_bytes()).collect();
             gl.bind_vertex_array(Some(vao));
@@ -79,14 +90,36 @@ impl ScratchDraw {
             gl.buffer_data_u8_slice(glow::ARRAY_BUFFER, &bytes, glow::STATIC_DRAW);
             gl.enable_vertex_attrib_array(0);
             gl.vertex_attrib_pointer_f32(0, components, glow::FLOAT, false, 4 * components, 0);
-            Some(ScratchDraw {
+            bind_target(
+                gl,
+                (tex, fbo),
+                target.side,
+                target.storage,
+                target.attachment,
+            );
+            gl.viewport(0, 0, target.side, target.side);
+            Ok(ScratchDraw {
                 program,
                 tex,
                 fbo,
                 vao,
                 vbo,
+                side: target.side,
             })
         }
+    }
+
+    /// The target's pixels as floats, `per_pixel` of them each in `format`, bottom row first.
+    pub fn read_floats(&self, gl: &glow::Context, format: u32, per_pixel: usize) -> Vec<f32> {
+        let side = self.side as u32;
+        super::target::read_pixels_bottom_up(
+            gl,
+            Some(self.fbo),
+            None,
+            (side, side),
+            (format, glow::FLOAT),
+            per_pixel,
+        )
     }
 
     /// Resets the bindings these replaced to 0 and deletes them.
@@ -115,11 +148,7 @@ impl ScratchDraw {
 ///
 /// # Safety
 /// `gl`'s context is current.
-pub(super) unsafe fn link(
-    gl: &glow::Context,
-    vertex: &str,
-    fragment: &str,
-) -> Option<glow::Program> {
+unsafe fn link(gl: &glow::Context, vertex: &str, fragment: &str) -> Option<glow::Program> {
     // SAFETY: the caller's promise; shaders are deleted once linked (or not).
     unsafe {
         let program = gl.create_program().ok()?;
