@@ -184,10 +184,14 @@ fn quick_report_measures_every_section_and_writes_it() {
         let fs = section("forsyth-shootout");
         assert!(n(fs, "priority_buffer_error") > 10.0 * n(fs, "depth_map_error"));
     } else {
-        // Without it they fall back to depth maps (listed with the frame's fallbacks): the
-        // ID rows are the depth map's, mostly acne without an offset.
+        // Without it they fall back to depth maps (listed with the frame's fallbacks) that keep
+        // the row's own offset, the default: every ID and priority row is the depth map's with
+        // its offset, and far from the acne of the one without.
         let fb = section("forsyth-buffers");
-        assert_eq!(n(fb, "id"), n(fb, "depth_no_offset"));
+        for row in ["id", "id_filtered", "priority", "priority_depth"] {
+            assert_eq!(n(fb, row), n(fb, "depth_offset"), "{row}");
+        }
+        assert!(n(fb, "depth_no_offset") > 10.0 * n(fb, "depth_offset"));
         println!("this GL lacks gl_PrimitiveID in fragment shaders: ID buffers fell back");
     }
     // Forsyth: multiple frusta beat six faces of the same texels where the camera faces the
