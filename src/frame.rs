@@ -39,6 +39,64 @@ pub struct Step {
     pub technique: Option<crate::options::Technique>,
 }
 
+/// Where the CPU waited for the GPU while making a frame: each one drains a GPU's pipeline
+/// (on a CPU rasteriser the work runs there anyway, so they cost little). Counted from the
+/// frame's call to its return, including what the caller asked for (pixels, masks, stepping).
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize)]
+pub struct Syncs {
+    /// Pixels or texels read into memory (`glReadPixels`, `glGetTexImage`).
+    pub read_backs: u32,
+    /// `glFinish`.
+    pub finishes: u32,
+    /// Query results read (`GL_QUERY_RESULT`: timer and sample queries).
+    pub query_reads: u32,
+    /// Fences waited on (`glClientWaitSync`).
+    pub fence_waits: u32,
+    /// `glGetError`: most drivers finish the commands queued before they can answer.
+    pub error_checks: u32,
+}
+
+impl Syncs {
+    pub fn total(&self) -> u32 {
+        self.read_backs + self.finishes + self.query_reads + self.fence_waits + self.error_checks
+    }
+
+    /// The counts in words, e.g. "3 (1 read-back, 1 finish, 1 error check)".
+    pub fn describe(&self) -> String {
+        let kinds = [
+            (self.read_backs, "read-back"),
+            (self.finishes, "finish"),
+            (self.query_reads, "query read"),
+            (self.fence_waits, "fence wait"),
+            (self.error_checks, "error check"),
+        ];
+        let named: Vec<String> = kinds
+            .iter()
+            .filter(|(n, _)| *n > 0)
+            .map(|(n, what)| match (n, *what) {
+                (1, w) => format!("1 {w}"),
+                (n, "finish") => format!("{n} finishes"),
+                (n, w) => format!("{n} {w}s"),
+            })
+            .collect();
+        match named.is_empty() {
+            true => "0".into(),
+            false => format!("{} ({})", self.total(), named.join(", ")),
+        }
+    }
+
+    /// What was counted after `before` was taken.
+    pub fn since(&self, before: &Syncs) -> Syncs {
+        Syncs {
+            read_backs: self.read_backs.wrapping_sub(before.read_backs),
+            finishes: self.finishes.wrapping_sub(before.finishes),
+            query_reads: self.query_reads.wrapping_sub(before.query_reads),
+            fence_waits: self.fence_waits.wrapping_sub(before.fence_waits),
+            error_checks: self.error_checks.wrapping_sub(before.error_checks),
+        }
+    }
+}
+
 /// What the frame reused from earlier frames.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize)]
 pub struct CacheStats {
@@ -94,6 +152,8 @@ pub struct Frame {
     pub fallbacks: Vec<crate::plan::fallback::Fallback>,
     /// Per hybrid light, what its classification found and what its mask saved (with masks).
     pub hybrid: Vec<HybridStats>,
+    /// Where making the frame waited for the GPU.
+    pub syncs: Syncs,
 }
 
 /// One hybrid light's classification and computation mask, measured after the frame.

@@ -263,6 +263,7 @@ pub fn run(common: &CommonArgs, args: &Args) -> Result<()> {
                 "differs_from_paper": Preset::Paper.differences(&options),
                 "plan": frame.plan_stats,
                 "cache": frame.cache,
+                "syncs": frame.syncs,
                 "volumes": volumes,
                 "hybrid": frame.hybrid.iter().map(|h| serde_json::json!({
                     "light": h.light,

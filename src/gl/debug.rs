@@ -105,6 +105,7 @@ pub fn read_depth_texture(
         );
         gl.bind_texture(bind, None);
     }
+    super::syncs::count(super::syncs::SyncKind::ReadBack);
     flip_rows(&mut data, size as usize);
     data
 }
@@ -128,6 +129,7 @@ pub fn id_image(gl: &glow::Context, texture: glow::Texture, size: u32) -> Rgba {
             );
             gl.bind_texture(glow::TEXTURE_2D, None);
         }
+        super::syncs::count(super::syncs::SyncKind::ReadBack);
     }
     let mut out = Vec::with_capacity(data.len());
     for texel in data.chunks_exact(4) {

@@ -20,6 +20,7 @@ pub mod program;
 pub mod renderer;
 mod scratch;
 pub mod shadow_maps;
+pub mod syncs;
 pub mod target;
 pub mod timing;
 pub mod upload;

@@ -20,11 +20,12 @@ use super::passes::{self, PassContext, set_scissor};
 use super::priority_mips;
 use super::program::{Program, ProgramError, sources};
 use super::shadow_maps::{MapKey, ShadowMaps};
+use super::syncs::{self, SyncKind};
 use super::target::{Framebuffer, GBufferTarget, MaskTarget};
 use super::timing::PassTimer;
 use super::upload::GpuScene;
 use super::volumes::{LightVolumes, VolumeBuffers};
-use crate::frame::CacheStats;
+use crate::frame::{CacheStats, Syncs};
 use crate::frame::{Frame, HybridStats, Step, StepKind};
 use crate::geometry::projection::cube_face_view;
 use crate::images::{GBuffer, Mask, MaskValue, Rgba, StencilImage};
@@ -626,6 +627,7 @@ impl Renderer {
         options: &Options,
         request: FrameRequest,
     ) -> Result<Frame, RenderError> {
+        let before = syncs::counted();
         let caps = self.caps_for(options)?;
         let (options, fallbacks) = fixed_function::resolve_all(options, |f| caps.has(f));
         if options.gl.pipeline == Pipeline::FixedFunction && self.fixed.is_none() {
@@ -647,6 +649,7 @@ impl Renderer {
         if !frame_only {
             self.planner.record_costs(&plan, &frame.passes);
         }
+        frame.syncs = syncs::counted().since(&before);
         Ok(frame)
     }
 
@@ -989,10 +992,12 @@ impl<'a> FrameRun<'a> {
         let passes = self.timer.finish(self.ctx.gl);
         // SAFETY: waits for the frame; no state change.
         unsafe { self.ctx.gl.finish() };
+        syncs::count(SyncKind::Finish);
         let frame_ms = self.start.elapsed().as_secs_f64() * 1e3;
         self.overlays();
         // SAFETY: error query only.
         let error = unsafe { self.ctx.gl.get_error() };
+        syncs::count(SyncKind::ErrorCheck);
         if error != glow::NO_ERROR {
             return Err(RenderError::Gl(format!(
                 "the frame raised GL error 0x{error:x}"
@@ -1020,6 +1025,7 @@ impl<'a> FrameRun<'a> {
             cache: self.cache,
             fallbacks: Vec::new(),
             hybrid,
+            syncs: Syncs::default(),
         })
     }
 
@@ -1058,6 +1064,7 @@ impl<'a> FrameRun<'a> {
         let passes = self.timer.finish(gl);
         // SAFETY: waits for the frame; no state change.
         unsafe { gl.finish() };
+        syncs::count(SyncKind::Finish);
         let plan = self.ctx.plan;
         Frame {
             image: self.color_image(),
@@ -1074,6 +1081,7 @@ impl<'a> FrameRun<'a> {
             cache: CacheStats::default(),
             fallbacks: Vec::new(),
             hybrid: Vec::new(),
+            syncs: Syncs::default(),
         }
     }
 

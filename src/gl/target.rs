@@ -240,6 +240,7 @@ fn read_as_asked<T: Copy + Default>(
         );
         gl.bind_framebuffer(glow::READ_FRAMEBUFFER, None);
     }
+    super::syncs::count(super::syncs::SyncKind::ReadBack);
     data
 }
 

@@ -4,6 +4,7 @@
 //! which serialises the pipeline but still attributes time to the right pass. GL_TIMESTAMP is never
 //! used: llvmpipe's is not accurate. Query objects are pooled so long runs create none.
 
+use super::syncs::SyncKind;
 use crate::plan::pass::{Clock, PassId, PassTime};
 use glow::HasContext;
 use std::time::Instant;
@@ -78,6 +79,7 @@ impl PassTimer {
         } else {
             // SAFETY: glFinish has no preconditions.
             unsafe { gl.finish() };
+            super::syncs::count(SyncKind::Finish);
             Span::Cpu(Instant::now())
         };
         self.open = Some((name, span));
@@ -94,6 +96,7 @@ impl PassTimer {
             Some((name, Span::Cpu(t))) => {
                 // SAFETY: as above.
                 unsafe { gl.finish() };
+                super::syncs::count(SyncKind::Finish);
                 self.results.push(PassTime {
                     pass: name,
                     ms: t.elapsed().as_secs_f64() * 1e3,
@@ -122,6 +125,7 @@ impl PassTimer {
         for (name, q) in self.gpu_done.drain(..) {
             // SAFETY: the query has ended; GL blocks until its result is available.
             let ns = unsafe { gl.get_query_parameter_u64(q, glow::QUERY_RESULT) };
+            super::syncs::count(SyncKind::QueryRead);
             self.results.push(PassTime {
                 pass: name,
                 ms: ns as f64 / 1e6,

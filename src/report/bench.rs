@@ -8,8 +8,7 @@
 //! configuration), and on every frame of the path against the sampled reference
 //! (`truth::sampled`, `estimate.samples` pixels per light), in an untimed pass after the timing.
 
-use crate::frame::CacheStats;
-use crate::frame::Frame;
+use crate::frame::{CacheStats, Frame, Syncs};
 use crate::gl::{FrameRequest, RenderError, Renderer};
 use crate::images::Mask;
 use crate::options::{OptionError, Options, Technique};
@@ -252,6 +251,8 @@ pub struct BenchRow {
     pub cache: CacheStats,
     /// What the measured frames redid and reused, per frame on average.
     pub redone: Redone,
+    /// Where the timed frames waited for the GPU, per frame on average.
+    pub syncs_per_frame: SyncsPerFrame,
     /// Options the GL could not run (or `gl.disable` hid), and what replaced them.
     pub fallbacks: Vec<Fallback>,
     /// The sampled reference on every measured frame of the path (None with shadows off or
@@ -358,8 +359,37 @@ struct Measured {
     frame_ms: Vec<f64>,
     /// What each timed frame redid and reused, summed.
     redone: Redone,
+    syncs: SyncsPerFrame,
     passes: BTreeMap<String, Vec<f64>>,
     clock: &'static str,
+}
+
+/// Where the timed frames waited for the GPU ([`Syncs`]), per frame on average.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Serialize)]
+pub struct SyncsPerFrame {
+    /// Every kind below together.
+    pub total: f64,
+    pub read_backs: f64,
+    pub finishes: f64,
+    pub query_reads: f64,
+    pub fence_waits: f64,
+    pub error_checks: f64,
+}
+
+impl SyncsPerFrame {
+    /// The mean of `frames` frames' counts.
+    fn mean(frames: &[Syncs]) -> SyncsPerFrame {
+        let n = frames.len().max(1) as f64;
+        let sum = |f: fn(&Syncs) -> u32| frames.iter().map(|s| f64::from(f(s))).sum::<f64>() / n;
+        SyncsPerFrame {
+            total: sum(Syncs::total),
+            read_backs: sum(|s| s.read_backs),
+            finishes: sum(|s| s.finishes),
+            query_reads: sum(|s| s.query_reads),
+            fence_waits: sum(|s| s.fence_waits),
+            error_checks: sum(|s| s.error_checks),
+        }
+    }
 }
 
 /// What the measured frames redid and what they took from earlier frames, per frame on
@@ -427,20 +457,31 @@ fn options_key(options: &Options) -> String {
     serde_json::to_string(options).unwrap_or_default()
 }
 
-/// One frame's time, without per-pass glFinish (it would serialise llvmpipe's pipeline), and
-/// what it reused.
+/// One timed frame: its time, what it reused and where it waited.
+struct Timed {
+    ms: f64,
+    cache: CacheStats,
+    syncs: Syncs,
+}
+
+/// One frame's time, without per-pass glFinish (it would serialise llvmpipe's pipeline), what
+/// it reused and where it waited.
 fn time_frame(
     renderer: &mut Renderer,
     scene: &Scene,
     camera: &crate::scene::Camera,
     options: &Options,
-) -> Result<(f64, CacheStats), RenderError> {
+) -> Result<Timed, RenderError> {
     let frame_only = FrameRequest {
         frame_only: true,
         ..FrameRequest::default()
     };
     let f = renderer.render_at(scene, camera, options, frame_only)?;
-    Ok((f.frame_ms, f.cache))
+    Ok(Timed {
+        ms: f.frame_ms,
+        cache: f.cache,
+        syncs: f.syncs,
+    })
 }
 
 /// `frame_ms` with a few frames timed pass by pass for the breakdown.
@@ -449,11 +490,17 @@ fn pass_breakdown(
     scene: &mut Scene,
     settings: &BenchSettings,
     options: &Options,
-    (frame_ms, redone): (Vec<f64>, Redone),
+    timed: &[Timed],
 ) -> Result<Measured, RenderError> {
+    let mut redone = Redone::default();
+    for t in timed {
+        redone.add(&t.cache);
+    }
+    let syncs: Vec<Syncs> = timed.iter().map(|t| t.syncs).collect();
     let mut m = Measured {
-        frame_ms,
+        frame_ms: timed.iter().map(|t| t.ms).collect(),
         redone: redone.per_frame(),
+        syncs: SyncsPerFrame::mean(&syncs),
         passes: BTreeMap::new(),
         clock: "cpu",
     };
@@ -535,16 +582,13 @@ impl<'a> Bench<'a> {
             self.renderer
                 .render_at(scene, &camera, options, FrameRequest::default())?;
         }
-        let mut frame_ms = Vec::new();
-        let mut redone = Redone::default();
+        let mut timed = Vec::new();
         for i in 0..settings.frames.max(1) {
             settings.pose(scene, i);
             let camera = settings.camera(scene, i);
-            let (ms, cache) = time_frame(self.renderer, scene, &camera, options)?;
-            frame_ms.push(ms);
-            redone.add(&cache);
+            timed.push(time_frame(self.renderer, scene, &camera, options)?);
         }
-        pass_breakdown(self.renderer, scene, settings, options, (frame_ms, redone))
+        pass_breakdown(self.renderer, scene, settings, options, &timed)
     }
 
     /// Every configuration and every baseline they need, each on a renderer of its own sharing
@@ -581,23 +625,19 @@ impl<'a> Bench<'a> {
             }
             renderers.push(r);
         }
-        let mut frame_ms = vec![Vec::new(); timed.len()];
-        let mut redone = vec![Redone::default(); timed.len()];
+        let mut frames: Vec<Vec<Timed>> = timed.iter().map(|_| Vec::new()).collect();
         for i in 0..settings.frames.max(1) {
             // Every configuration draws the same posed frame.
             settings.pose(scene, i);
             let camera = settings.camera(scene, i);
             for k in 0..timed.len() {
                 let j = (k + i) % timed.len();
-                let (ms, cache) = time_frame(&mut renderers[j], scene, &camera, &timed[j].1)?;
-                frame_ms[j].push(ms);
-                redone[j].add(&cache);
+                frames[j].push(time_frame(&mut renderers[j], scene, &camera, &timed[j].1)?);
             }
         }
         let mut out = HashMap::new();
-        let measured = frame_ms.into_iter().zip(redone);
-        for (((key, o), r), m) in timed.into_iter().zip(&mut renderers).zip(measured) {
-            out.insert(key, pass_breakdown(r, scene, settings, &o, m)?);
+        for (((key, o), r), f) in timed.into_iter().zip(&mut renderers).zip(&frames) {
+            out.insert(key, pass_breakdown(r, scene, settings, &o, f)?);
         }
         Ok(out)
     }
@@ -815,6 +855,7 @@ impl<'a> Bench<'a> {
                 plan,
                 cache,
                 redone: m.redone,
+                syncs_per_frame: m.syncs,
                 fallbacks,
                 sampled,
             });
@@ -862,6 +903,7 @@ pub(crate) fn test_row(technique: &str, label: &str, ms: f64, error: f64) -> Ben
         plan: Default::default(),
         cache: Default::default(),
         redone: Redone::default(),
+        syncs_per_frame: SyncsPerFrame::default(),
     }
 }
 

@@ -576,6 +576,7 @@ fn timings(ui: &mut egui::Ui, state: &ViewerState, frame: &Frame) {
         "CPU time around glFinish"
     };
     ui.label(format!("frame {:.1} ms ({clock})", frame.frame_ms));
+    ui.label(format!("waits for the GPU: {}", frame.syncs.describe()));
     for (name, ms) in &stages {
         ui.horizontal(|ui| {
             let (rect, _) = ui.allocate_exact_size(Vec2::new(150.0, 12.0), Sense::hover());

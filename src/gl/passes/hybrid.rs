@@ -69,6 +69,7 @@ pub fn samples_passed(gl: &glow::Context, draw: impl FnOnce()) -> Option<u64> {
         draw();
         gl.end_query(glow::SAMPLES_PASSED);
         let n = gl.get_query_parameter_u32(q, glow::QUERY_RESULT);
+        crate::gl::syncs::count(crate::gl::syncs::SyncKind::QueryRead);
         gl.delete_query(q);
         Some(n as u64)
     }

@@ -1,0 +1,75 @@
+//! Counts every place the GL layer makes the CPU wait for the GPU ([`Syncs`]), so that a frame
+//! reports its waits and a test can assert there are none. Counted per thread: a GL context is
+//! current on one thread, and tests draw on several at once.
+
+use crate::frame::Syncs;
+use std::cell::Cell;
+
+/// One kind of wait.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum SyncKind {
+    ReadBack,
+    Finish,
+    QueryRead,
+    FenceWait,
+    ErrorCheck,
+}
+
+thread_local! {
+    static COUNTED: Cell<Syncs> = Cell::new(Syncs::default());
+}
+
+/// Records one wait of `kind` on this thread.
+pub fn count(kind: SyncKind) {
+    COUNTED.with(|c| {
+        let mut s = c.get();
+        let n = match kind {
+            SyncKind::ReadBack => &mut s.read_backs,
+            SyncKind::Finish => &mut s.finishes,
+            SyncKind::QueryRead => &mut s.query_reads,
+            SyncKind::FenceWait => &mut s.fence_waits,
+            SyncKind::ErrorCheck => &mut s.error_checks,
+        };
+        *n = n.wrapping_add(1);
+        c.set(s);
+    });
+}
+
+/// Every wait counted on this thread so far: take one before and one after, and
+/// [`Syncs::since`] says what lay between.
+pub fn counted() -> Syncs {
+    COUNTED.with(Cell::get)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn each_kind_counts_in_its_own_field_and_since_subtracts() {
+        let before = counted();
+        count(SyncKind::ReadBack);
+        count(SyncKind::ReadBack);
+        count(SyncKind::Finish);
+        count(SyncKind::QueryRead);
+        count(SyncKind::FenceWait);
+        count(SyncKind::ErrorCheck);
+        let d = counted().since(&before);
+        assert_eq!(
+            d,
+            Syncs {
+                read_backs: 2,
+                finishes: 1,
+                query_reads: 1,
+                fence_waits: 1,
+                error_checks: 1,
+            }
+        );
+        assert_eq!(d.total(), 6);
+        assert_eq!(
+            d.describe(),
+            "6 (2 read-backs, 1 finish, 1 query read, 1 fence wait, 1 error check)"
+        );
+        assert_eq!(Syncs::default().describe(), "0");
+    }
+}
