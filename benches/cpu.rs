@@ -7,12 +7,13 @@
 
 use criterion::{BatchSize, Criterion, Throughput, criterion_group, criterion_main};
 use glam::{DVec3, Vec3};
-use shadowlab::options::{Options, VolumeCasters};
+use shadowlab::options::Options;
 use shadowlab::plan::planner::Planner;
+use shadowlab::plan::volume_draws::settings;
 use shadowlab::q3::pk3::{Vfs, data_dir};
 use shadowlab::scene::path;
 use shadowlab::scene::{Camera, Scene, SurfaceOwner};
-use shadowlab::shadow::volume::{CasterGroups, VolumeSettings, build_volume};
+use shadowlab::shadow::volume::{CasterGroups, build_volume};
 use shadowlab::truth::reference::{Reference, shadow_ray_origin};
 use std::hint::black_box;
 use std::path::Path;
@@ -54,17 +55,6 @@ fn load() -> Loaded {
         options: loaded.options,
         scene,
         bsp,
-    }
-}
-
-fn settings(options: &Options) -> VolumeSettings {
-    let o = &options.shadow_volume;
-    VolumeSettings {
-        rule: o.edge_rule,
-        extrusion: o.extrusion,
-        finite_distance: o.finite_distance,
-        facing_epsilon: o.facing_epsilon,
-        two_sided: o.casters == VolumeCasters::Both,
     }
 }
 
@@ -114,7 +104,7 @@ fn benches(c: &mut Criterion) {
         .find(|g| g.owner == SurfaceOwner::World)
         .expect("oa_dm1 has a world");
     let light = scene.lights[0].position.as_dvec3();
-    let s = settings(options);
+    let s = settings(&options.shadow_volume);
     c.bench_function("volume_build_light0_world", |b| {
         b.iter(|| {
             (0..world.components.len())

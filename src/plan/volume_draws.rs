@@ -293,7 +293,8 @@ pub struct PieceChoices<'a> {
 /// A fit's inputs besides the depth: the rectangle and the planes allowed.
 type FitKey = ([i32; 4], usize);
 
-fn settings(o: &ShadowVolumeOptions) -> VolumeSettings {
+/// How the volumes of `o` are built (the CPU benchmarks build them so too).
+pub fn settings(o: &ShadowVolumeOptions) -> VolumeSettings {
     VolumeSettings {
         rule: o.edge_rule,
         extrusion: o.extrusion,
