@@ -25,7 +25,6 @@ pub mod target;
 pub mod timing;
 pub mod upload;
 pub mod volumes;
-pub mod walkthrough;
 #[cfg(feature = "window")]
 pub mod window;
 

@@ -10,6 +10,7 @@ pub mod live_error;
 pub mod option_panel;
 pub mod script;
 pub mod state;
+pub mod walkthrough;
 // The window, its event loop and the egui interface: only with the `window` feature, so that the
 // loaders and the headless renderer build without winit and egui (the fuzz targets do).
 #[cfg(feature = "window")]

@@ -4,8 +4,8 @@
 use super::option_panel::{self, Field, FieldValue};
 use super::script::ViewMode;
 use super::state::{Action, Pending, ViewerState};
+use super::walkthrough;
 use crate::frame::Frame;
-use crate::gl::walkthrough;
 use crate::options::Technique;
 use crate::scene::LightKind;
 use egui::{Color32, Key, Pos2, Rect, Sense, Stroke, TextureHandle, Vec2};
