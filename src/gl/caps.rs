@@ -283,23 +283,12 @@ pub fn probe(gl: &glow::Context, fb_depth_stencil: (i32, i32)) -> Caps {
         get_i(gl, glow::MAJOR_VERSION),
         get_i(gl, glow::MINOR_VERSION),
     );
-    let es = gl.version().is_embedded;
-    // ES has no profile mask (the query is an error there).
-    let profile_mask = if es {
-        0
-    } else {
-        get_i(gl, glow::CONTEXT_PROFILE_MASK)
+    let c = Probing {
+        gl,
+        es: gl.version().is_embedded,
+        version: (major, minor),
+        extensions: &extensions,
     };
-    let profile = if es {
-        "es"
-    } else if profile_mask & glow::CONTEXT_CORE_PROFILE_BIT as i32 != 0 {
-        "core"
-    } else if profile_mask & glow::CONTEXT_COMPATIBILITY_PROFILE_BIT as i32 != 0 {
-        "compatibility"
-    } else {
-        "unknown"
-    };
-    let at_least = |ma: i32, mi: i32| (major, minor) >= (ma, mi);
     // The shaders use gl_ClipDistance only where it is core (see program::has_clip_distances):
     // ES 3.x counts here would come from an extension the shaders do not enable.
     let clip_shaders = super::program::has_clip_distances(gl);
@@ -308,143 +297,10 @@ pub fn probe(gl: &glow::Context, fb_depth_stencil: (i32, i32)) -> Caps {
     } else {
         0
     };
-    let has_ext = |e: &str| extensions.contains(e);
-
-    let mut features = Vec::new();
-    let mut add = |key, supported, detail: String, fallback| {
-        features.push(Feature {
-            key,
-            supported,
-            detail,
-            fallback,
-        })
-    };
-    add(
-        "separate_stencil",
-        at_least(2, 0),
-        "glStencilOpSeparate (GL 2.0)".into(),
-        "two stencil passes, back faces then front faces (the paper)",
-    );
-    add(
-        "stencil_wrap",
-        at_least(1, 4) || has_ext("GL_EXT_stencil_wrap"),
-        "INCR_WRAP / DECR_WRAP (GL 1.4)".into(),
-        "saturating INCR / DECR (the paper's card)",
-    );
-    // GL_DEPTH_CLAMP_EXT of ES has the same value.
-    let depth_clamp = if es {
-        has_ext("GL_EXT_depth_clamp")
-    } else {
-        at_least(3, 2) || has_ext("GL_ARB_depth_clamp")
-    } && enable_works(gl, glow::DEPTH_CLAMP);
-    add(
-        "depth_clamp",
-        depth_clamp,
-        if es {
-            "GL_DEPTH_CLAMP (ES: GL_EXT_depth_clamp)".into()
-        } else {
-            "GL_DEPTH_CLAMP (GL 3.2)".into()
-        },
-        "infinite far-plane projection instead of depth clamping",
-    );
-    // The extension string and glDepthBoundsEXT loaded (glow has no entry point for it).
-    let entry = super::depth_bounds_ext::current().is_some();
-    let depth_bounds = has_ext("GL_EXT_depth_bounds_test") && entry;
-    add(
-        "depth_bounds",
-        depth_bounds,
-        match (has_ext("GL_EXT_depth_bounds_test"), entry) {
-            (true, true) => "GL_EXT_depth_bounds_test".into(),
-            (true, false) => "GL_EXT_depth_bounds_test listed, glDepthBoundsEXT not loaded".into(),
-            _ => "GL_EXT_depth_bounds_test missing".into(),
-        },
-        "clip planes behind the depth buffer per volume part (plan.depth_clip) and scissors",
-    );
-    let (timer, timer_detail) = if es {
-        // Same GL_TIME_ELAPSED(_EXT) value and entry points on ES with the extension.
-        if has_ext("GL_EXT_disjoint_timer_query") {
-            timer_query_check(gl)
-        } else {
-            (false, "GL_EXT_disjoint_timer_query missing (ES)".into())
-        }
-    } else if at_least(3, 3) || has_ext("GL_ARB_timer_query") {
-        timer_query_check(gl)
-    } else {
-        (false, "GL_ARB_timer_query missing".into())
-    };
-    add(
-        "timer_query",
-        timer,
-        timer_detail,
-        "CPU time around glFinish per pass",
-    );
-    let (primitive_id, primitive_id_detail) = super::primitive_id_probe::primitive_id_works(gl, es);
-    add(
-        "primitive_id",
-        primitive_id,
-        primitive_id_detail,
-        "depth maps (shadow_map.buffer = depth)",
-    );
-    let (offset_per_fragment, offset_detail) = super::offset_probe::offset_per_fragment(gl, es);
-    add(
-        "offset_per_fragment",
-        offset_per_fragment,
-        offset_detail,
-        "shadow_map.offset_factor at least 10 for warped maps (psm, tsm) and frusta, which \
-         are fitted tightly in depth",
-    );
-    let depth_tex = depth_texture_attachable(gl, glow::DEPTH_COMPONENT24, glow::UNSIGNED_INT);
-    add(
-        "render_to_depth_texture",
-        depth_tex,
-        "framebuffer object with a DEPTH_COMPONENT24 texture".into(),
-        "copy from the framebuffer (glCopyTexSubImage2D, the paper)",
-    );
-    let float_depth = depth_texture_attachable(gl, glow::DEPTH_COMPONENT32F, glow::FLOAT);
-    // ES forbids it by the letter (Mesa's ES accepts it anyway): not relied on there.
-    add(
-        "depth_read",
-        !es,
-        if es {
-            "glReadPixels of depth (ES 3.0 reads colour only)".into()
-        } else {
-            "glReadPixels of depth (GL 1.0)".into()
-        },
-        "the depth pyramid reduced by a shader and read as colour (plan.reduce_depth)",
-    );
-    let depth_copy = !es && depth_copy_works(gl);
-    add(
-        "depth_copy",
-        depth_copy,
-        if es {
-            "glCopyTexSubImage2D from a depth buffer (ES 3.0 copies colour only)".into()
-        } else {
-            "glCopyTexSubImage2D from a depth buffer (GL 1.1)".into()
-        },
-        "render into the depth texture (framebuffer object)",
-    );
-    add(
-        "float_depth",
-        float_depth,
-        "DEPTH_COMPONENT32F textures".into(),
-        "24-bit depth",
-    );
-    add(
-        "clip_distances",
-        max_clip_distances >= 6,
-        if clip_shaders {
-            format!("{max_clip_distances} gl_ClipDistance planes")
-        } else {
-            "GLSL ES 3.00 has no gl_ClipDistance".into()
-        },
-        "texgen range test instead of light-frustum clip planes",
-    );
-    add(
-        "debug_output",
-        at_least(4, 3) || has_ext("GL_KHR_debug"),
-        "KHR_debug message callback".into(),
-        "glGetError checks only",
-    );
+    let mut features = stencil_and_depth_features(&c);
+    features.extend(drawn_features(&c));
+    features.extend(depth_texture_features(&c));
+    features.extend(shader_features(&c, clip_shaders, max_clip_distances));
     clear_errors(gl);
     Caps {
         vendor,
@@ -453,7 +309,7 @@ pub fn probe(gl: &glow::Context, fb_depth_stencil: (i32, i32)) -> Caps {
         glsl_version,
         major,
         minor,
-        profile,
+        profile: profile_name(&c),
         depth_bits: fb_depth_stencil.0,
         stencil_bits: fb_depth_stencil.1,
         max_texture_size: get_i(gl, glow::MAX_TEXTURE_SIZE),
@@ -464,4 +320,203 @@ pub fn probe(gl: &glow::Context, fb_depth_stencil: (i32, i32)) -> Caps {
         features,
         extensions,
     }
+}
+
+/// What the feature checks read: the context, its version and its extensions.
+struct Probing<'a> {
+    gl: &'a glow::Context,
+    es: bool,
+    version: (i32, i32),
+    extensions: &'a BTreeSet<String>,
+}
+
+impl Probing<'_> {
+    fn at_least(&self, major: i32, minor: i32) -> bool {
+        self.version >= (major, minor)
+    }
+
+    fn has_ext(&self, name: &str) -> bool {
+        self.extensions.contains(name)
+    }
+}
+
+fn feature(
+    key: &'static str,
+    supported: bool,
+    detail: impl Into<String>,
+    fallback: &'static str,
+) -> Feature {
+    Feature {
+        key,
+        supported,
+        detail: detail.into(),
+        fallback,
+    }
+}
+
+/// The context's profile: es, core, compatibility (or unknown).
+fn profile_name(c: &Probing) -> &'static str {
+    if c.es {
+        // ES has no profile mask (the query is an error there).
+        return "es";
+    }
+    let mask = get_i(c.gl, glow::CONTEXT_PROFILE_MASK);
+    if mask & glow::CONTEXT_CORE_PROFILE_BIT as i32 != 0 {
+        "core"
+    } else if mask & glow::CONTEXT_COMPATIBILITY_PROFILE_BIT as i32 != 0 {
+        "compatibility"
+    } else {
+        "unknown"
+    }
+}
+
+/// The stencil operations and depth tests shadow volumes use.
+fn stencil_and_depth_features(c: &Probing) -> Vec<Feature> {
+    // GL_DEPTH_CLAMP_EXT of ES has the same value.
+    let depth_clamp = if c.es {
+        c.has_ext("GL_EXT_depth_clamp")
+    } else {
+        c.at_least(3, 2) || c.has_ext("GL_ARB_depth_clamp")
+    } && enable_works(c.gl, glow::DEPTH_CLAMP);
+    // The extension string and glDepthBoundsEXT loaded (glow has no entry point for it).
+    let listed = c.has_ext("GL_EXT_depth_bounds_test");
+    let entry = super::depth_bounds_ext::current().is_some();
+    vec![
+        feature(
+            "separate_stencil",
+            c.at_least(2, 0),
+            "glStencilOpSeparate (GL 2.0)",
+            "two stencil passes, back faces then front faces (the paper)",
+        ),
+        feature(
+            "stencil_wrap",
+            c.at_least(1, 4) || c.has_ext("GL_EXT_stencil_wrap"),
+            "INCR_WRAP / DECR_WRAP (GL 1.4)",
+            "saturating INCR / DECR (the paper's card)",
+        ),
+        feature(
+            "depth_clamp",
+            depth_clamp,
+            if c.es {
+                "GL_DEPTH_CLAMP (ES: GL_EXT_depth_clamp)"
+            } else {
+                "GL_DEPTH_CLAMP (GL 3.2)"
+            },
+            "infinite far-plane projection instead of depth clamping",
+        ),
+        feature(
+            "depth_bounds",
+            listed && entry,
+            match (listed, entry) {
+                (true, true) => "GL_EXT_depth_bounds_test",
+                (true, false) => "GL_EXT_depth_bounds_test listed, glDepthBoundsEXT not loaded",
+                _ => "GL_EXT_depth_bounds_test missing",
+            },
+            "clip planes behind the depth buffer per volume part (plan.depth_clip) and scissors",
+        ),
+    ]
+}
+
+/// What only drawing (or timing) shows: timer queries, gl_PrimitiveID, per-fragment offset.
+fn drawn_features(c: &Probing) -> Vec<Feature> {
+    let (timer, timer_detail) = if c.es {
+        // Same GL_TIME_ELAPSED(_EXT) value and entry points on ES with the extension.
+        if c.has_ext("GL_EXT_disjoint_timer_query") {
+            timer_query_check(c.gl)
+        } else {
+            (false, "GL_EXT_disjoint_timer_query missing (ES)".into())
+        }
+    } else if c.at_least(3, 3) || c.has_ext("GL_ARB_timer_query") {
+        timer_query_check(c.gl)
+    } else {
+        (false, "GL_ARB_timer_query missing".into())
+    };
+    let (primitive_id, primitive_id_detail) =
+        super::primitive_id_probe::primitive_id_works(c.gl, c.es);
+    let (offset_per_fragment, offset_detail) = super::offset_probe::offset_per_fragment(c.gl, c.es);
+    vec![
+        feature(
+            "timer_query",
+            timer,
+            timer_detail,
+            "CPU time around glFinish per pass",
+        ),
+        feature(
+            "primitive_id",
+            primitive_id,
+            primitive_id_detail,
+            "depth maps (shadow_map.buffer = depth)",
+        ),
+        feature(
+            "offset_per_fragment",
+            offset_per_fragment,
+            offset_detail,
+            "shadow_map.offset_factor at least 10 for warped maps (psm, tsm) and frusta, which \
+             are fitted tightly in depth",
+        ),
+    ]
+}
+
+/// Depth textures: drawn into, read back, copied into, and of floats.
+fn depth_texture_features(c: &Probing) -> Vec<Feature> {
+    let depth_tex = depth_texture_attachable(c.gl, glow::DEPTH_COMPONENT24, glow::UNSIGNED_INT);
+    let float_depth = depth_texture_attachable(c.gl, glow::DEPTH_COMPONENT32F, glow::FLOAT);
+    let depth_copy = !c.es && depth_copy_works(c.gl);
+    vec![
+        feature(
+            "render_to_depth_texture",
+            depth_tex,
+            "framebuffer object with a DEPTH_COMPONENT24 texture",
+            "copy from the framebuffer (glCopyTexSubImage2D, the paper)",
+        ),
+        // ES forbids it by the letter (Mesa's ES accepts it anyway): not relied on there.
+        feature(
+            "depth_read",
+            !c.es,
+            if c.es {
+                "glReadPixels of depth (ES 3.0 reads colour only)"
+            } else {
+                "glReadPixels of depth (GL 1.0)"
+            },
+            "the depth pyramid reduced by a shader and read as colour (plan.reduce_depth)",
+        ),
+        feature(
+            "depth_copy",
+            depth_copy,
+            if c.es {
+                "glCopyTexSubImage2D from a depth buffer (ES 3.0 copies colour only)"
+            } else {
+                "glCopyTexSubImage2D from a depth buffer (GL 1.1)"
+            },
+            "render into the depth texture (framebuffer object)",
+        ),
+        feature(
+            "float_depth",
+            float_depth,
+            "DEPTH_COMPONENT32F textures",
+            "24-bit depth",
+        ),
+    ]
+}
+
+/// Clip distances in shaders and the debug callback.
+fn shader_features(c: &Probing, clip_shaders: bool, max_clip_distances: i32) -> Vec<Feature> {
+    vec![
+        feature(
+            "clip_distances",
+            max_clip_distances >= 6,
+            if clip_shaders {
+                format!("{max_clip_distances} gl_ClipDistance planes")
+            } else {
+                "GLSL ES 3.00 has no gl_ClipDistance".into()
+            },
+            "texgen range test instead of light-frustum clip planes",
+        ),
+        feature(
+            "debug_output",
+            c.at_least(4, 3) || c.has_ext("GL_KHR_debug"),
+            "KHR_debug message callback",
+            "glGetError checks only",
+        ),
+    ]
 }
