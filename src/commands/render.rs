@@ -5,11 +5,12 @@ use anyhow::{Context, Result};
 use glam::Vec3;
 use shadowlab::frame::Frame;
 use shadowlab::gl::FrameRequest;
-use shadowlab::options::Technique;
+use shadowlab::options::{Options, Technique};
 use shadowlab::plan::auto::learning_frames;
 use shadowlab::presets::Preset;
 use shadowlab::report::estimate::{learn_auto, sampled_frame};
 use shadowlab::scene::Scene;
+use shadowlab::truth::sampled::FrameSample;
 use shadowlab::truth::{self, Reference, reference};
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -176,12 +177,9 @@ fn probe(scene: &Scene, frame: &Frame, (x, y): (u32, u32)) -> Result<()> {
     Ok(())
 }
 
-pub fn run(common: &CommonArgs, args: &Args) -> Result<()> {
-    let super::Loaded {
-        mut scene,
-        options,
-        report,
-    } = load(common, args.scene.as_deref())?;
+/// Moves the camera to `--path`'s frame `--frame` and poses the scene's motion at `--time`
+/// (else at that frame's time).
+fn pose(scene: &mut Scene, args: &Args) -> Result<()> {
     if let (Some(path), Some(frame)) = (&args.path, args.frame) {
         let keys = shadowlab::scene::path::read(path)?;
         let key = keys.get(frame).with_context(|| {
@@ -202,6 +200,93 @@ pub fn run(common: &CommonArgs, args: &Args) -> Result<()> {
         "--time must be a finite number of seconds >= 0"
     );
     scene.pose_at(time);
+    Ok(())
+}
+
+/// `--stats`: what the frame decided, reused and waited on, and the sampled error.
+fn stats_json(
+    frame: &Frame,
+    options: &Options,
+    sampled: Option<&(FrameSample, f64)>,
+) -> serde_json::Value {
+    let volumes: Vec<_> = frame.volumes.iter().collect();
+    serde_json::json!({
+        "preset": Preset::matching(options),
+        "fallbacks": frame.fallbacks,
+        "differs_from_paper": Preset::Paper.differences(options),
+        "plan": frame.plan_stats,
+        "cache": frame.cache,
+        "syncs": frame.syncs,
+        "volumes": volumes,
+        "hybrid": frame.hybrid.iter().map(|h| serde_json::json!({
+            "light": h.light,
+            "receiver_pixels": h.receiver_pixels,
+            "silhouette_pixels": h.silhouette_pixels,
+            "silhouette_share": h.silhouette_share(),
+            "volume_fragments": h.volume_fragments,
+            "volume_fragments_unmasked": h.volume_fragments_unmasked,
+            "fragment_share": h.fragment_share(),
+        })).collect::<Vec<_>>(),
+        "sampled": sampled.map(|(s, ms)| serde_json::json!({
+            "samples_per_light": options.estimate.samples,
+            "trace_ms": ms,
+            "total": s.total,
+            "per_light": s.per_light,
+        })),
+    })
+}
+
+/// Each hybrid light's classification, a line each.
+fn print_hybrid(frame: &Frame) {
+    for h in &frame.hybrid {
+        let fragments = match (h.volume_fragments, h.volume_fragments_unmasked) {
+            (Some(m), Some(all)) => format!(
+                "; volume fragments past the computation mask {m} of {all} ({:.1}%)",
+                100.0 * h.fragment_share().unwrap_or(0.0)
+            ),
+            _ => String::new(),
+        };
+        eprintln!(
+            "light{} hybrid: {} silhouette pixels of {} receivers ({:.2}%){fragments}",
+            h.light,
+            h.silhouette_pixels,
+            h.receiver_pixels,
+            100.0 * h.silhouette_share()
+        );
+    }
+}
+
+/// The frame's passes in a line, per-light passes summed so that 64 lights still give one
+/// readable line.
+fn pass_summary(frame: &Frame) -> String {
+    let mut totals: Vec<(String, f64, usize)> = Vec::new();
+    for p in &frame.passes {
+        let stage = p.pass.summed_name();
+        match totals.iter_mut().find(|(n, _, _)| *n == stage) {
+            Some(t) => {
+                t.1 += p.ms;
+                t.2 += 1;
+            }
+            None => totals.push((stage, p.ms, 1)),
+        }
+    }
+    totals
+        .iter()
+        .map(|(n, ms, count)| match count {
+            1 => format!("{n} {ms:.1} ms"),
+            _ => format!("{n} {ms:.1} ms over {count}"),
+        })
+        .collect::<Vec<_>>()
+        .join(", ")
+}
+
+pub fn run(common: &CommonArgs, args: &Args) -> Result<()> {
+    let super::Loaded {
+        mut scene,
+        options,
+        report,
+    } = load(common, args.scene.as_deref())?;
+    pose(&mut scene, args)?;
     // `ctx` is borrowed mutably only to show the frame in a window.
     #[cfg_attr(not(feature = "window"), allow(unused_mut))]
     let (mut ctx, mut renderer) = start_gl(&options)?;
@@ -254,70 +339,10 @@ pub fn run(common: &CommonArgs, args: &Args) -> Result<()> {
         probe(&scene, &frame, p)?;
     }
     if args.stats {
-        let volumes: Vec<_> = frame.volumes.iter().collect();
-        println!(
-            "{}",
-            serde_json::to_string_pretty(&serde_json::json!({
-                "preset": Preset::matching(&options),
-                "fallbacks": frame.fallbacks,
-                "differs_from_paper": Preset::Paper.differences(&options),
-                "plan": frame.plan_stats,
-                "cache": frame.cache,
-                "syncs": frame.syncs,
-                "volumes": volumes,
-                "hybrid": frame.hybrid.iter().map(|h| serde_json::json!({
-                    "light": h.light,
-                    "receiver_pixels": h.receiver_pixels,
-                    "silhouette_pixels": h.silhouette_pixels,
-                    "silhouette_share": h.silhouette_share(),
-                    "volume_fragments": h.volume_fragments,
-                    "volume_fragments_unmasked": h.volume_fragments_unmasked,
-                    "fragment_share": h.fragment_share(),
-                })).collect::<Vec<_>>(),
-                "sampled": sampled.as_ref().map(|(s, ms)| serde_json::json!({
-                    "samples_per_light": options.estimate.samples,
-                    "trace_ms": ms,
-                    "total": s.total,
-                    "per_light": s.per_light,
-                })),
-            }))?
-        );
+        let stats = stats_json(&frame, &options, sampled.as_ref());
+        println!("{}", serde_json::to_string_pretty(&stats)?);
     }
-    for h in &frame.hybrid {
-        let fragments = match (h.volume_fragments, h.volume_fragments_unmasked) {
-            (Some(m), Some(all)) => format!(
-                "; volume fragments past the computation mask {m} of {all} ({:.1}%)",
-                100.0 * h.fragment_share().unwrap_or(0.0)
-            ),
-            _ => String::new(),
-        };
-        eprintln!(
-            "light{} hybrid: {} silhouette pixels of {} receivers ({:.2}%){fragments}",
-            h.light,
-            h.silhouette_pixels,
-            h.receiver_pixels,
-            100.0 * h.silhouette_share()
-        );
-    }
-    // Per-light passes are summed so that 64 lights still give one readable line.
-    let mut totals: Vec<(String, f64, usize)> = Vec::new();
-    for p in &frame.passes {
-        let stage = p.pass.summed_name();
-        match totals.iter_mut().find(|(n, _, _)| *n == stage) {
-            Some(t) => {
-                t.1 += p.ms;
-                t.2 += 1;
-            }
-            None => totals.push((stage, p.ms, 1)),
-        }
-    }
-    let passes: Vec<String> = totals
-        .iter()
-        .map(|(n, ms, count)| match count {
-            1 => format!("{n} {ms:.1} ms"),
-            _ => format!("{n} {ms:.1} ms over {count}"),
-        })
-        .collect();
+    print_hybrid(&frame);
     eprintln!(
         "wrote {} ({}x{}, {} path, scene {} loaded in {:.0} ms, frame {:.1} ms: {})",
         args.out.display(),
@@ -327,7 +352,7 @@ pub fn run(common: &CommonArgs, args: &Args) -> Result<()> {
         scene.name,
         report.load_ms,
         frame.frame_ms,
-        passes.join(", ")
+        pass_summary(&frame)
     );
     Ok(())
 }
