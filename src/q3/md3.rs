@@ -361,6 +361,58 @@ pub fn parse(data: &[u8]) -> Result<Md3, Md3Error> {
     })
 }
 
+/// Surface `surface`'s triangles, each index checked against its `num_verts` vertices.
+fn parse_triangles(
+    bytes: &[u8],
+    surface: usize,
+    num_verts: usize,
+) -> Result<Vec<[u32; 3]>, Md3Error> {
+    let mut triangles = Vec::with_capacity(bytes.len() / TRIANGLE_SIZE);
+    for (t, c) in bytes.chunks_exact(TRIANGLE_SIZE).enumerate() {
+        let mut tri = [0u32; 3];
+        for (k, out) in tri.iter_mut().enumerate() {
+            let i = i32_at(c, 4 * k);
+            *out = u32::try_from(i)
+                .ok()
+                .filter(|&i| (i as usize) < num_verts)
+                .ok_or(Md3Error::IndexOutOfRange {
+                    surface,
+                    triangle: t,
+                    index: i64::from(i),
+                    verts: num_verts,
+                })?;
+        }
+        triangles.push(tri);
+    }
+    Ok(triangles)
+}
+
+/// Texture coordinates, each finite.
+fn parse_st(bytes: &[u8], label: &str) -> Result<Vec<[f32; 2]>, Md3Error> {
+    let mut st = Vec::with_capacity(bytes.len() / ST_SIZE);
+    for (v, c) in bytes.chunks_exact(ST_SIZE).enumerate() {
+        let uv = [f32_at(c, 0), f32_at(c, 4)];
+        check_finite(&uv, || format!("{label} st {v}"))?;
+        st.push(uv);
+    }
+    Ok(st)
+}
+
+/// Positions (fixed point, 1/64 unit) and normals (latitude and longitude bytes) of every
+/// frame's vertices.
+fn parse_xyz_normals(bytes: &[u8]) -> (Vec<Vec3>, Vec<Vec3>) {
+    bytes
+        .chunks_exact(XYZ_NORMAL_SIZE)
+        .map(|c| {
+            let coord = |at| f32::from(i16_at(c, at)) * XYZ_SCALE;
+            (
+                Vec3::new(coord(0), coord(2), coord(4)),
+                decode_normal(u16_at(c, 6)),
+            )
+        })
+        .unzip()
+}
+
 /// Parses the surface record at file offset `start`; returns it and the record's size.
 fn parse_surface(
     data: &[u8],
@@ -433,23 +485,7 @@ fn parse_surface(
         num_triangles,
         TRIANGLE_SIZE,
     )?;
-    let mut triangles = Vec::with_capacity(num_triangles);
-    for (t, c) in tri_bytes.chunks_exact(TRIANGLE_SIZE).enumerate() {
-        let mut tri = [0u32; 3];
-        for (k, out) in tri.iter_mut().enumerate() {
-            let i = i32_at(c, 4 * k);
-            *out = u32::try_from(i)
-                .ok()
-                .filter(|&i| (i as usize) < num_verts)
-                .ok_or(Md3Error::IndexOutOfRange {
-                    surface: index,
-                    triangle: t,
-                    index: i64::from(i),
-                    verts: num_verts,
-                })?;
-        }
-        triangles.push(tri);
-    }
+    let triangles = parse_triangles(tri_bytes, index, num_verts)?;
 
     let shader_bytes = region(
         record,
@@ -472,12 +508,7 @@ fn parse_surface(
         num_verts,
         ST_SIZE,
     )?;
-    let mut st = Vec::with_capacity(num_verts);
-    for (v, c) in st_bytes.chunks_exact(ST_SIZE).enumerate() {
-        let uv = [f32_at(c, 0), f32_at(c, 4)];
-        check_finite(&uv, || format!("{label} st {v}"))?;
-        st.push(uv);
-    }
+    let st = parse_st(st_bytes, &label)?;
 
     let xyz_bytes = region(
         record,
@@ -487,13 +518,7 @@ fn parse_surface(
         num_frames * num_verts,
         XYZ_NORMAL_SIZE,
     )?;
-    let mut positions = Vec::with_capacity(num_frames * num_verts);
-    let mut normals = Vec::with_capacity(num_frames * num_verts);
-    for c in xyz_bytes.chunks_exact(XYZ_NORMAL_SIZE) {
-        let coord = |at| f32::from(i16_at(c, at)) * XYZ_SCALE;
-        positions.push(Vec3::new(coord(0), coord(2), coord(4)));
-        normals.push(decode_normal(u16_at(c, 6)));
-    }
+    let (positions, normals) = parse_xyz_normals(xyz_bytes);
 
     let surface = Surface {
         name,
