@@ -231,6 +231,62 @@ const ORDER: &[&str] = &[
     "vector-subdivision",
 ];
 
+/// The bar over `units` units of work, hidden unless `settings.progress`.
+fn progress_bar(settings: &Settings, units: usize) -> ProgressBar {
+    if !settings.progress {
+        return ProgressBar::hidden();
+    }
+    let b = ProgressBar::new(units as u64);
+    b.set_style(
+        ProgressStyle::with_template(
+            "reproduce [{elapsed_precise}] {bar:30} {pos}/{len} sections  {msg}",
+        )
+        .unwrap_or_else(|_| ProgressStyle::default_bar()),
+    );
+    b
+}
+
+/// The report's lines on where it ran: the GL, the frame settings, the machine, the options
+/// set for every configuration.
+fn environment(renderer: &Renderer, settings: &Settings) -> Vec<String> {
+    let mut lines = vec![
+        format!(
+            "Renderer: {} ({}), {}",
+            renderer.caps.renderer, renderer.caps.version, renderer.caps.vendor
+        ),
+        format!(
+            "{}x{}, {} warm-up and {} measured frames per configuration; times are medians; \
+             error is measured on the first frame against the exact ray-cast reference.",
+            settings.width, settings.height, settings.warmup, settings.frames
+        ),
+        format!(
+            "Machine: {} CPU threads; shadowlab {}.",
+            std::thread::available_parallelism().map_or(0, |n| n.get()),
+            env!("CARGO_PKG_VERSION")
+        ),
+    ];
+    if !settings.sets.is_empty() {
+        lines.push(format!(
+            "Options set for every configuration: {}",
+            settings.sets.join(" ")
+        ));
+    }
+    lines
+}
+
+/// Claims measured on two scenes merged into one section each, the sections in `ORDER`.
+fn merged_in_order(sections: Vec<Section>) -> Vec<Section> {
+    let mut merged: Vec<Section> = Vec::new();
+    for s in sections {
+        match merged.iter_mut().find(|m| m.id == s.id) {
+            Some(m) => m.absorb(s),
+            None => merged.push(s),
+        }
+    }
+    merged.sort_by_key(|s| ORDER.iter().position(|o| *o == s.id).unwrap_or(ORDER.len()));
+    merged
+}
+
 /// Runs every section and writes `out/index.html`, `out/index.md`, `out/results.json` and the
 /// images.
 pub fn run(
@@ -247,43 +303,11 @@ pub fn run(
     // Units of work: the figure sections and both claims, then one sweep per scene.
     let figure_units =
         figures::SECTIONS + 2 * claims::SECTIONS + thesis::SECTIONS + forsyth::SECTIONS;
-    let bar = if settings.progress {
-        let b = ProgressBar::new((figure_units + sweep_scenes.len()) as u64);
-        b.set_style(
-            ProgressStyle::with_template(
-                "reproduce [{elapsed_precise}] {bar:30} {pos}/{len} sections  {msg}",
-            )
-            .unwrap_or_else(|_| ProgressStyle::default_bar()),
-        );
-        b
-    } else {
-        ProgressBar::hidden()
-    };
+    let bar = progress_bar(settings, figure_units + sweep_scenes.len());
     let mut report = Report {
-        environment: vec![
-            format!(
-                "Renderer: {} ({}), {}",
-                renderer.caps.renderer, renderer.caps.version, renderer.caps.vendor
-            ),
-            format!(
-                "{}x{}, {} warm-up and {} measured frames per configuration; times are medians; \
-                 error is measured on the first frame against the exact ray-cast reference.",
-                settings.width, settings.height, settings.warmup, settings.frames
-            ),
-            format!(
-                "Machine: {} CPU threads; shadowlab {}.",
-                std::thread::available_parallelism().map_or(0, |n| n.get()),
-                env!("CARGO_PKG_VERSION")
-            ),
-        ],
+        environment: environment(renderer, settings),
         ..Report::default()
     };
-    if !settings.sets.is_empty() {
-        report.environment.push(format!(
-            "Options set for every configuration: {}",
-            settings.sets.join(" ")
-        ));
-    }
     let mut sections: Vec<Section> = Vec::new();
 
     // The figures and the claims on the scenes they name.
@@ -355,15 +379,7 @@ pub fn run(
     report.environment.sort();
     report.environment.dedup();
 
-    // Claims measured on two scenes are merged into one section each.
-    let mut merged: Vec<Section> = Vec::new();
-    for s in sections {
-        match merged.iter_mut().find(|m| m.id == s.id) {
-            Some(m) => m.absorb(s),
-            None => merged.push(s),
-        }
-    }
-    merged.sort_by_key(|s| ORDER.iter().position(|o| *o == s.id).unwrap_or(ORDER.len()));
+    let mut merged = merged_in_order(sections);
     report.summary = summary(&merged, &sweeps);
     merged.extend(sweeps);
     report.sections = merged;
