@@ -289,6 +289,9 @@ pub fn probe(gl: &glow::Context, fb_depth_stencil: (i32, i32)) -> Caps {
         version: (major, minor),
         extensions: &extensions,
     };
+    // Before the feature checks, as it always ran: below GL 3.2 the query is an error, which
+    // the checks' error handling and the final clear_errors absorb.
+    let profile = profile_name(&c);
     // The shaders use gl_ClipDistance only where it is core (see program::has_clip_distances):
     // ES 3.x counts here would come from an extension the shaders do not enable.
     let clip_shaders = super::program::has_clip_distances(gl);
@@ -309,7 +312,7 @@ pub fn probe(gl: &glow::Context, fb_depth_stencil: (i32, i32)) -> Caps {
         glsl_version,
         major,
         minor,
-        profile: profile_name(&c),
+        profile,
         depth_bits: fb_depth_stencil.0,
         stencil_bits: fb_depth_stencil.1,
         max_texture_size: get_i(gl, glow::MAX_TEXTURE_SIZE),

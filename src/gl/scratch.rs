@@ -75,12 +75,27 @@ impl ScratchDraw {
         // SAFETY: the caller's promise; what is created here is deleted by `delete`.
         unsafe {
             let program = link(gl, vertex, fragment).ok_or("its program did not link")?;
-            let (Ok(vao), Ok(vbo), Ok(tex), Ok(fbo)) = (
+            let created = (
                 gl.create_vertex_array(),
                 gl.create_buffer(),
                 gl.create_texture(),
                 gl.create_framebuffer(),
-            ) else {
+            );
+            let (Ok(vao), Ok(vbo), Ok(tex), Ok(fbo)) = created else {
+                // Delete what was made before the one that failed.
+                let (vao, vbo, tex, fbo) = created;
+                if let Ok(v) = vao {
+                    gl.delete_vertex_array(v);
+                }
+                if let Ok(b) = vbo {
+                    gl.delete_buffer(b);
+                }
+                if let Ok(t) = tex {
+                    gl.delete_texture(t);
+                }
+                if let Ok(f) = fbo {
+                    gl.delete_framebuffer(f);
+                }
                 gl.delete_program(program);
                 return Err("scratch objects unavailable");
             };
