@@ -990,9 +990,7 @@ impl<'a> FrameRun<'a> {
         let stencil = or_stopped!(self.light_passes(&maps));
         set_scissor(self.ctx.gl, None);
         let passes = self.timer.finish(self.ctx.gl);
-        // SAFETY: waits for the frame; no state change.
-        unsafe { self.ctx.gl.finish() };
-        syncs::count(SyncKind::Finish);
+        syncs::finish(self.ctx.gl);
         let frame_ms = self.start.elapsed().as_secs_f64() * 1e3;
         self.overlays();
         // SAFETY: error query only.
@@ -1062,9 +1060,7 @@ impl<'a> FrameRun<'a> {
     fn stopped(&mut self, image: Rgba) -> Frame {
         let gl = self.ctx.gl;
         let passes = self.timer.finish(gl);
-        // SAFETY: waits for the frame; no state change.
-        unsafe { gl.finish() };
-        syncs::count(SyncKind::Finish);
+        syncs::finish(gl);
         let plan = self.ctx.plan;
         Frame {
             image: self.color_image(),

@@ -35,6 +35,13 @@ pub fn count(kind: SyncKind) {
     });
 }
 
+/// Waits for every command sent so far (`glFinish`), counted.
+pub fn finish(gl: &glow::Context) {
+    // SAFETY: glFinish has no preconditions and changes no state.
+    unsafe { glow::HasContext::finish(gl) };
+    count(SyncKind::Finish);
+}
+
 /// Every wait counted on this thread so far: take one before and one after, and
 /// [`Syncs::since`] says what lay between.
 pub fn counted() -> Syncs {

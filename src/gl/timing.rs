@@ -77,9 +77,7 @@ impl PassTimer {
             unsafe { gl.begin_query(glow::TIME_ELAPSED, q) };
             Span::Gpu(q)
         } else {
-            // SAFETY: glFinish has no preconditions.
-            unsafe { gl.finish() };
-            super::syncs::count(SyncKind::Finish);
+            super::syncs::finish(gl);
             Span::Cpu(Instant::now())
         };
         self.open = Some((name, span));
@@ -94,9 +92,7 @@ impl PassTimer {
                 self.gpu_done.push((name, q));
             }
             Some((name, Span::Cpu(t))) => {
-                // SAFETY: as above.
-                unsafe { gl.finish() };
-                super::syncs::count(SyncKind::Finish);
+                super::syncs::finish(gl);
                 self.results.push(PassTime {
                     pass: name,
                     ms: t.elapsed().as_secs_f64() * 1e3,
