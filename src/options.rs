@@ -484,6 +484,22 @@ pub enum Warp {
 }
 
 option_enum! {
+    /// What the planner's costs are weighed for (`plan.profile`).
+    pub enum Profile {
+        /// `software` where the GL renderer is a CPU rasteriser (llvmpipe, softpipe, OSMesa's
+        /// swrast), else `gpu`.
+        Auto = "auto",
+        /// Fill costs the CPU that draws it, and waiting for the GL costs little (its
+        /// "GPU" is the same CPU): decisions that read the frame back to save fill are on.
+        Software = "software",
+        /// A pipelined GPU: reading anything back mid-frame stalls it for a whole pipeline's
+        /// depth, so every decision that reads the frame back (`occlusion`, `depth_clip`) is
+        /// off; `depth_bounds_test`, which needs no read-back, stays.
+        Gpu = "gpu",
+    }
+}
+
+option_enum! {
     /// Where stencil counting happens.
     pub enum CountingMode {
         /// Depth-fail, Carmack's reverse: back faces increment and front faces decrement where the
@@ -831,6 +847,11 @@ define_options! {
     group plan: PlanOptions {
         /// Master switch for every decision below.
         enabled: bool = true;
+        /// The machine the decisions are weighed for: `software` (a CPU rasteriser: fill is
+        /// dear, a read-back cheap), `gpu` (a pipelined GPU: no decision reads the frame
+        /// back, so a frame never waits on it) or `auto` (`software` on llvmpipe, softpipe
+        /// and OSMesa, else `gpu`). The decisions each profile turns off say so below.
+        profile: Profile = Profile::Auto;
         /// Skip lights whose range misses the view frustum or every visible BSP leaf, and give
         /// no shadow work to a light with no caster in range.
         cull_lights: bool = true;
@@ -853,7 +874,8 @@ define_options! {
         truncate_volumes: bool = true;
         /// Read the depth buffer back after the base pass and leave out of the shadow-volume
         /// work every receiver whose box it hides wholly (a max-depth pyramid, as a GPU's
-        /// hierarchical Z): casters that shadow only hidden receivers drop out.
+        /// hierarchical Z): casters that shadow only hidden receivers drop out. Off under
+        /// `profile = gpu`: the read-back would stall the GPU's pipeline mid-frame.
         occlusion: bool = true;
         /// Read that depth back as the farthest depth of each 4×4 block, reduced by a shader
         /// (level 2 of the pyramid: the CPU converts and copies a sixteenth of the pixels),
@@ -864,7 +886,8 @@ define_options! {
         /// depth buffer within its rectangle (read after the base pass): fragments there would
         /// fail the depth test, so they are not rasterised. A depth bounds test applied to the
         /// volume. Depth-fail parts are left whole: the mirror clip (nothing nearer than the
-        /// nearest stored depth) is as exact in theory but broke counts on llvmpipe.
+        /// nearest stored depth) is as exact in theory but broke counts on llvmpipe. Off under
+        /// `profile = gpu` (it reads the depth back, as `occlusion` does).
         depth_clip: bool = true;
         /// Clip planes per part for `depth_clip`, chosen greedily among the farthest depth in
         /// the rectangle and tilted planes fitted to the depth of the whole, its halves,
