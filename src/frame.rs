@@ -124,13 +124,22 @@ pub struct CacheStats {
 
 #[derive(Debug, Clone)]
 pub struct Frame {
-    /// The frame's colour buffer, top row first.
+    /// The frame's colour buffer, top row first; empty (0×0) where the request left the image
+    /// on the GPU (`FrameRequest::image_on_gpu`).
     pub image: Rgba,
+    /// The frame's size in pixels (the image's, whether or not it was read back).
+    pub width: u32,
+    pub height: u32,
     /// World to clip space of the camera that rendered the frame.
     pub view_proj: Mat4,
     pub passes: Vec<PassTime>,
-    /// Wall time of the whole frame including glFinish.
+    /// Wall time from the call (planning, uploads, submission) to the frame's end: its
+    /// completion where the frame waited for the GL anyway (`completed`: the caller asked for
+    /// pixels), else its submission; a caller that needs completion without pixels waits on
+    /// a fence (`Renderer::fence`), as `bench` does for its latency.
     pub frame_ms: f64,
+    /// Whether `frame_ms` includes the GL's completion of the frame.
+    pub completed: bool,
     /// What the camera sees per pixel (when masks were requested).
     pub gbuffer: Option<GBuffer>,
     /// Each planned light's decision per pixel (when masks were requested).
@@ -185,11 +194,11 @@ impl HybridStats {
 
 impl Frame {
     pub fn width(&self) -> u32 {
-        self.image.width
+        self.width
     }
 
     pub fn height(&self) -> u32 {
-        self.image.height
+        self.height
     }
 
     pub fn pixel(&self, x: u32, y: u32) -> [u8; 4] {

@@ -246,3 +246,44 @@ fn subdivide_check_agrees_with_the_ray_caster() {
     );
     std::fs::remove_dir_all(&dir).ok();
 }
+
+/// Issue 38's acceptance, as a person runs it: `bench --scene assets/scenes/oa_dm1.toml --set
+/// plan.profile=gpu --json x.json` writes 0 waits for the GPU per timed frame (no read-back,
+/// finish, query read, fence wait or error check between a frame's call and its return), and
+/// still a latency, a CPU time and a throughput. Made to fail: with `plan.profile=software`
+/// (the planner's depth read back in most frames) or the frame's glFinish made unconditional,
+/// `total` is above 0.
+#[test]
+fn bench_under_the_gpu_profile_waits_for_nothing_in_a_timed_frame() {
+    common::openarena_data();
+    let dir = temp("bench-gpu");
+    let json = dir.join("x.json");
+    let out = shadowlab()
+        .current_dir(env!("CARGO_MANIFEST_DIR"))
+        .args([
+            "bench",
+            "--scene",
+            "assets/scenes/oa_dm1.toml",
+            "--set",
+            "plan.profile=gpu",
+            "--frames",
+            "3",
+            "--warmup",
+            "1",
+            "--json",
+        ])
+        .arg(&json)
+        .output()
+        .unwrap();
+    stdout_of(out);
+    let rows: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+    let row = &rows.as_array().unwrap()[0];
+    let syncs = &row["syncs_per_frame"];
+    assert_eq!(syncs["total"].as_f64(), Some(0.0), "{syncs}");
+    for key in ["frame_ms", "submit_ms"] {
+        assert!(row[key]["median"].as_f64().unwrap() > 0.0, "{key}: {row}");
+    }
+    assert!(row["pipelined_ms"].as_f64().unwrap() > 0.0);
+    std::fs::remove_dir_all(&dir).ok();
+}

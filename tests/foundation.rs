@@ -277,10 +277,12 @@ fn window_path_works_under_xvfb() {
     std::fs::remove_dir_all(&dir).ok();
 }
 
-/// Every wait for the GPU a frame makes is counted in `Frame::syncs`: a frame that only draws
-/// (as `bench` times it) reads its image back and waits for it (today's frame does: issue 38
-/// takes those away where the caller asks for no pixels), and asking for masks adds the masks'
-/// read-backs. With the counting removed from the read-back path, both read-back counts are 0.
+/// Every wait for the GPU a frame makes is counted in `Frame::syncs`: a frame whose caller wants
+/// its pixels reads its image back and waits for it, asking for masks adds the masks'
+/// read-backs, and a frame left on the GPU (`image_on_gpu`, as `bench` times it) under
+/// `plan.profile = gpu` waits for nothing at all. Made to fail: with the counting removed from
+/// the read-back path both read-back counts are 0; with the frame's final glFinish made
+/// unconditional the frame left on the GPU counts 1 finish.
 #[test]
 fn a_frame_counts_its_waits_for_the_gpu() {
     let scene = builtin::default_scene();
@@ -296,10 +298,29 @@ fn a_frame_counts_its_waits_for_the_gpu() {
     let masked = r.render_with(&scene, &options, request(true)).unwrap();
     assert!(plain.syncs.read_backs >= 1, "{:?}", plain.syncs);
     assert!(plain.syncs.finishes >= 1, "{:?}", plain.syncs);
+    assert!(plain.completed && plain.image.data.len() == 160 * 120 * 4);
     assert!(
         masked.syncs.read_backs > plain.syncs.read_backs,
         "masks read back nothing more: {:?} against {:?}",
         masked.syncs,
         plain.syncs
     );
+    let gpu = options_with(&[
+        "technique=shadow_volume",
+        "width=160",
+        "height=120",
+        "plan.profile=gpu",
+    ]);
+    let left = shadowlab::gl::FrameRequest {
+        frame_only: true,
+        image_on_gpu: true,
+        ..Default::default()
+    };
+    for _ in 0..3 {
+        let f = r.render_with(&scene, &gpu, left).unwrap();
+        assert_eq!(f.syncs.total(), 0, "{}", f.syncs.describe());
+        assert!(!f.completed && f.image.data.is_empty());
+        assert_eq!((f.width(), f.height()), (160, 120));
+    }
+    r.check_errors().unwrap();
 }

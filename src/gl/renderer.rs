@@ -40,7 +40,7 @@ use crate::plan::planner::{DepthNeed, Planner};
 use crate::plan::scissor::Scissor;
 use crate::plan::volume_draws::VolumeStats;
 use crate::plan::{LightPlan, Plan};
-use crate::plan::{fallback, fixed_function};
+use crate::plan::{fallback, fixed_function, profile};
 use crate::scene::{Camera, Scene};
 use crate::shadow::views::ViewKind;
 use crate::truth::subdivision::Geometry;
@@ -83,6 +83,11 @@ pub struct FrameRequest {
     /// Time the frame only, not each pass, where per-pass times need glFinish between passes
     /// (no timer queries, e.g. llvmpipe): benchmarks take frame times this way.
     pub frame_only: bool,
+    /// Leave the frame's image on the GPU: nothing is read back and nothing waits for the GL
+    /// (`Frame::image` is empty, `frame_ms` ends at submission); the viewer presents the
+    /// frame's colour buffer, `bench` waits on a fence of its own. Masks, a stencil read or a
+    /// walkthrough step still read what they ask for.
+    pub image_on_gpu: bool,
 }
 
 /// Debug drawing over a frame.
@@ -627,9 +632,10 @@ impl Renderer {
         options: &Options,
         request: FrameRequest,
     ) -> Result<Frame, RenderError> {
-        let before = syncs::counted();
+        let (before, start) = (syncs::counted(), Instant::now());
         let caps = self.caps_for(options)?;
         let (options, fallbacks) = fixed_function::resolve_all(options, |f| caps.has(f));
+        let options = profile::resolve(&options, caps.is_software());
         if options.gl.pipeline == Pipeline::FixedFunction && self.fixed.is_none() {
             return Err(RenderError::Unsupported(
                 "gl.pipeline = fixed_function needs a compatibility-profile context with the \
@@ -642,7 +648,7 @@ impl Renderer {
         let options = &options;
         let plan = self.planner.plan(scene, camera, options);
         let frame_only = request.frame_only;
-        let mut frame = self.execute(scene, &plan, options, request)?;
+        let mut frame = self.execute(scene, &plan, options, request, start)?;
         frame.fallbacks = fallbacks;
         frame.cache.caster_groups_built = self.planner.take_groups_rebuilt();
         // Frame-only timing has no per-light passes to learn from.
@@ -657,6 +663,18 @@ impl Renderer {
     pub fn caps_for(&self, options: &Options) -> Result<Caps, RenderError> {
         let disabled = fallback::disabled(options).map_err(RenderError::Unsupported)?;
         Ok(self.caps.with_disabled(&disabled))
+    }
+
+    /// A fence after every command sent so far: wait on it to know a frame left on the GPU
+    /// (`FrameRequest::image_on_gpu`) is done.
+    pub fn fence(&self) -> Result<syncs::Fence, RenderError> {
+        syncs::Fence::insert(&self.gl).map_err(RenderError::Gl)
+    }
+
+    /// The GL's error flag since the last check, as an error: frames that wait for nothing do
+    /// not check it, so a caller drawing many of them checks once after (counted).
+    pub fn check_errors(&self) -> Result<(), RenderError> {
+        check_errors(&self.gl)
     }
 
     /// What `technique = auto` has measured so far.
@@ -714,6 +732,7 @@ impl Renderer {
         plan: &Plan,
         options: &Options,
         request: FrameRequest,
+        start: Instant,
     ) -> Result<Frame, RenderError> {
         self.check_support(options, plan)?;
         let copy = self.prepare_targets(plan, options, request)?;
@@ -764,7 +783,7 @@ impl Renderer {
                 models_uploaded,
                 ..CacheStats::default()
             },
-            start: Instant::now(),
+            start,
             volume_stats: Vec::new(),
             fixed: self
                 .fixed
@@ -989,27 +1008,34 @@ impl<'a> FrameRun<'a> {
         self.subdivisions()?;
         let stencil = or_stopped!(self.light_passes(&maps));
         set_scissor(self.ctx.gl, None);
-        let passes = self.timer.finish(self.ctx.gl);
-        syncs::finish(self.ctx.gl);
+        let gl = self.ctx.gl;
+        let passes = self.timer.finish(gl);
+        // Only a caller that wants pixels makes the frame wait: the read-back would anyway.
+        let completed = !self.request.image_on_gpu || self.request.masks;
+        if completed {
+            syncs::finish(gl);
+        }
         let frame_ms = self.start.elapsed().as_secs_f64() * 1e3;
         self.overlays();
-        // SAFETY: error query only.
-        let error = unsafe { self.ctx.gl.get_error() };
-        syncs::count(SyncKind::ErrorCheck);
-        if error != glow::NO_ERROR {
-            return Err(RenderError::Gl(format!(
-                "the frame raised GL error 0x{error:x}"
-            )));
+        if completed {
+            check_errors(gl)?;
         }
-        let rgba = self.target.read_rgba(self.ctx.gl);
+        let (width, height) = (self.target.width, self.target.height);
+        let image = match self.request.image_on_gpu {
+            true => Rgba {
+                width: 0,
+                height: 0,
+                data: Vec::new(),
+            },
+            false => self.color_image(),
+        };
         let (gbuffer, masks, hybrid) = self.measure(&maps);
         let plan = self.ctx.plan;
         Ok(Frame {
-            image: Rgba {
-                width: self.target.width,
-                height: self.target.height,
-                data: rgba,
-            },
+            image,
+            width,
+            height,
+            completed,
             view_proj: plan.camera.view_proj,
             passes,
             frame_ms,
@@ -1064,6 +1090,9 @@ impl<'a> FrameRun<'a> {
         let plan = self.ctx.plan;
         Frame {
             image: self.color_image(),
+            width: self.target.width,
+            height: self.target.height,
+            completed: true,
             view_proj: plan.camera.view_proj,
             passes,
             frame_ms: self.start.elapsed().as_secs_f64() * 1e3,
@@ -1908,6 +1937,18 @@ impl FrameRun<'_> {
 /// The fixed-function pipeline's mask marks every receiver fragment it draws (legacy lighting
 /// reaches per vertex): pixels whose surface the light does not reach (range, cone, facing,
 /// judged as the shader path and the reference judge them) become "not a receiver".
+/// The GL's error flag, as the frame's error (counted: most drivers finish the commands queued
+/// before they can answer).
+fn check_errors(gl: &glow::Context) -> Result<(), RenderError> {
+    // SAFETY: error query only.
+    let error = unsafe { gl.get_error() };
+    syncs::count(SyncKind::ErrorCheck);
+    match error {
+        glow::NO_ERROR => Ok(()),
+        e => Err(RenderError::Gl(format!("the frame raised GL error 0x{e:x}"))),
+    }
+}
+
 fn keep_reached(values: &mut [u8], gbuffer: &GBuffer, light: &crate::scene::Light) {
     for (i, v) in values.iter_mut().enumerate() {
         let reached = gbuffer.is_receiver_surface(i) && {

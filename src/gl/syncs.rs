@@ -3,6 +3,7 @@
 //! current on one thread, and tests draw on several at once.
 
 use crate::frame::Syncs;
+use glow::HasContext;
 use std::cell::Cell;
 
 /// One kind of wait.
@@ -38,8 +39,56 @@ pub fn count(kind: SyncKind) {
 /// Waits for every command sent so far (`glFinish`), counted.
 pub fn finish(gl: &glow::Context) {
     // SAFETY: glFinish has no preconditions and changes no state.
-    unsafe { glow::HasContext::finish(gl) };
+    unsafe { gl.finish() };
     count(SyncKind::Finish);
+}
+
+/// A point in the GL's command stream (`glFenceSync`): the caller that needs to know when a
+/// frame's work is done (bench's latency, a bound on frames in flight) waits for it, the frame
+/// itself never does.
+#[derive(Debug)]
+pub struct Fence(glow::Fence);
+
+impl Fence {
+    /// A fence after every command sent so far; flushed, so that a wait on it ends.
+    pub fn insert(gl: &glow::Context) -> Result<Fence, String> {
+        // SAFETY: glFenceSync with the only condition GL defines; the flush has no preconditions.
+        unsafe {
+            let f = gl.fence_sync(glow::SYNC_GPU_COMMANDS_COMPLETE, 0)?;
+            gl.flush();
+            Ok(Fence(f))
+        }
+    }
+
+    /// Waits until the GL has run every command before the fence (counted), and deletes it.
+    pub fn wait(self, gl: &glow::Context) {
+        count(SyncKind::FenceWait);
+        // A second's timeout per try, retried: a frame may take longer on a software rasteriser,
+        // and only a lost context makes the wait fail.
+        loop {
+            // SAFETY: the fence is live (deleted only below).
+            let r = unsafe { gl.client_wait_sync(self.0, glow::SYNC_FLUSH_COMMANDS_BIT, 1_000_000_000) };
+            if r != glow::TIMEOUT_EXPIRED {
+                break;
+            }
+        }
+        // SAFETY: no one else holds the fence.
+        unsafe { gl.delete_sync(self.0) };
+    }
+
+    /// Whether the GL has run every command before the fence, without waiting (a poll is no
+    /// wait: nothing is counted).
+    pub fn signalled(&self, gl: &glow::Context) -> bool {
+        // SAFETY: the fence is live; a zero timeout returns at once.
+        let r = unsafe { gl.client_wait_sync(self.0, 0, 0) };
+        r == glow::ALREADY_SIGNALED || r == glow::CONDITION_SATISFIED
+    }
+
+    /// Deletes the fence without waiting.
+    pub fn delete(self, gl: &glow::Context) {
+        // SAFETY: no one else holds the fence.
+        unsafe { gl.delete_sync(self.0) };
+    }
 }
 
 /// Every wait counted on this thread so far: take one before and one after, and

@@ -48,10 +48,11 @@ impl PassTimer {
         self.use_queries
     }
 
-    /// Starts a frame. Without timer queries, `per_pass = false` times no pass: the frame then
-    /// runs without the glFinish calls that serialise it, and only its total is meaningful.
+    /// Starts a frame. `per_pass = false` times no pass: the frame then runs without the
+    /// glFinish calls that serialise it (no timer queries) or the query reads that wait for
+    /// its end (timer queries), and only its total is meaningful.
     pub fn start_frame(&mut self, per_pass: bool) {
-        self.silent = !per_pass && !self.use_queries;
+        self.silent = !per_pass;
     }
 
     /// Starts timing the GPU work of pass `name`; ends any pass still open.

@@ -14,6 +14,7 @@ pub mod merge;
 pub mod occlusion;
 pub mod pass;
 pub mod planner;
+pub mod profile;
 pub mod scissor;
 pub mod volume_draws;
 

@@ -24,6 +24,7 @@ use crate::truth::{Counts, ExactMasks, Reference};
 use indicatif::{ProgressBar, ProgressStyle};
 use serde::Serialize;
 use std::collections::{BTreeMap, HashMap};
+use std::time::Instant;
 
 /// Frames timed pass by pass for each configuration's breakdown (after its measured frames).
 pub const PASS_FRAMES: usize = 3;
@@ -232,7 +233,14 @@ pub struct BenchRow {
     pub height: u32,
     pub lights: usize,
     pub frames: usize,
+    /// Latency: from the call (planning, uploads, submission) to the GL's completion of the
+    /// frame, which bench waits for on a fence outside the frame.
     pub frame_ms: MsStats,
+    /// Median from the call to its return: the CPU's part of the frame.
+    pub submit_ms: Median,
+    /// Milliseconds per frame with up to two frames in flight (throughput): the path drawn
+    /// again back to back, bench waiting only for the frame before the one just sent.
+    pub pipelined_ms: f64,
     pub shadows_off_frame_ms: Median,
     pub ratio_to_shadows_off: f64,
     /// Median milliseconds of each pass over the measured frames; `lights.<stage>` sums a stage
@@ -251,7 +259,8 @@ pub struct BenchRow {
     pub cache: CacheStats,
     /// What the measured frames redid and reused, per frame on average.
     pub redone: Redone,
-    /// Where the timed frames waited for the GPU, per frame on average.
+    /// Where the timed frames waited for the GPU, per frame on average: the frame's own waits,
+    /// from its call to its return (bench's fence wait for the latency comes after).
     pub syncs_per_frame: SyncsPerFrame,
     /// Options the GL could not run (or `gl.disable` hid), and what replaced them.
     pub fallbacks: Vec<Fallback>,
@@ -356,7 +365,12 @@ pub struct Capture {
 
 #[derive(Clone)]
 struct Measured {
+    /// Latency: from the call to the frame's completion.
     frame_ms: Vec<f64>,
+    /// From the call to its return (planning, uploads, submission).
+    submit_ms: Vec<f64>,
+    /// Milliseconds per frame with up to two frames in flight (0 where not measured).
+    pipelined_ms: f64,
     /// What each timed frame redid and reused, summed.
     redone: Redone,
     syncs: SyncsPerFrame,
@@ -459,29 +473,76 @@ fn options_key(options: &Options) -> String {
 
 /// One timed frame: its time, what it reused and where it waited.
 struct Timed {
+    /// From the call to the frame's completion.
     ms: f64,
+    /// From the call to its return.
+    submit_ms: f64,
     cache: CacheStats,
     syncs: Syncs,
 }
 
-/// One frame's time, without per-pass glFinish (it would serialise llvmpipe's pipeline), what
-/// it reused and where it waited.
+/// What a timed frame asks for: no per-pass timing (it would serialise llvmpipe's pipeline,
+/// or read queries at the frame's end) and no pixels, so the frame itself waits for nothing.
+const TIMED: FrameRequest = FrameRequest {
+    masks: false,
+    stop_after: None,
+    stencil_of: None,
+    overlays: crate::gl::Overlays {
+        volumes: false,
+        silhouettes: false,
+        texel_grid: false,
+        light: None,
+    },
+    frame_only: true,
+    image_on_gpu: true,
+};
+
+/// One frame's latency: from the call to the GL's completion, which bench waits for on a fence
+/// after the frame returned (the frame's own waits, `syncs`, are counted inside the call only).
 fn time_frame(
     renderer: &mut Renderer,
     scene: &Scene,
     camera: &crate::scene::Camera,
     options: &Options,
 ) -> Result<Timed, RenderError> {
-    let frame_only = FrameRequest {
-        frame_only: true,
-        ..FrameRequest::default()
-    };
-    let f = renderer.render_at(scene, camera, options, frame_only)?;
+    let start = Instant::now();
+    let f = renderer.render_at(scene, camera, options, TIMED)?;
+    renderer.fence()?.wait(renderer.gl());
     Ok(Timed {
-        ms: f.frame_ms,
+        ms: start.elapsed().as_secs_f64() * 1e3,
+        submit_ms: f.frame_ms,
         cache: f.cache,
         syncs: f.syncs,
     })
+}
+
+/// Milliseconds per frame over the path's frames drawn back to back with up to two in flight:
+/// after each frame is sent, bench waits only for the one before it. Throughput, where the
+/// latency of `time_frame` serialises the CPU's planning with the GL's drawing.
+fn pipelined_ms(
+    renderer: &mut Renderer,
+    scene: &mut Scene,
+    settings: &BenchSettings,
+    options: &Options,
+) -> Result<f64, RenderError> {
+    let frames = settings.frames.max(1);
+    let start = Instant::now();
+    let mut in_flight: Option<crate::gl::syncs::Fence> = None;
+    for i in 0..frames {
+        settings.pose(scene, i);
+        let camera = settings.camera(scene, i);
+        renderer.render_at(scene, &camera, options, TIMED)?;
+        let fence = renderer.fence()?;
+        if let Some(before) = in_flight.replace(fence) {
+            before.wait(renderer.gl());
+        }
+    }
+    if let Some(last) = in_flight {
+        last.wait(renderer.gl());
+    }
+    // The timed frames checked no GL error (a check waits): one check covers them all.
+    renderer.check_errors()?;
+    Ok(start.elapsed().as_secs_f64() * 1e3 / frames as f64)
 }
 
 /// `frame_ms` with a few frames timed pass by pass for the breakdown.
@@ -499,6 +560,8 @@ fn pass_breakdown(
     let syncs: Vec<Syncs> = timed.iter().map(|t| t.syncs).collect();
     let mut m = Measured {
         frame_ms: timed.iter().map(|t| t.ms).collect(),
+        submit_ms: timed.iter().map(|t| t.submit_ms).collect(),
+        pipelined_ms: pipelined_ms(renderer, scene, settings, options)?,
         redone: redone.per_frame(),
         syncs: SyncsPerFrame::mean(&syncs),
         passes: BTreeMap::new(),
@@ -834,6 +897,10 @@ impl<'a> Bench<'a> {
                 lights: per_light.len(),
                 frames: m.frame_ms.len(),
                 frame_ms,
+                submit_ms: Median {
+                    median: median(&mut m.submit_ms.clone()),
+                },
+                pipelined_ms: m.pipelined_ms,
                 shadows_off_frame_ms: Median { median: off_ms },
                 ratio_to_shadows_off: if off_ms > 0.0 {
                     frame_ms.median / off_ms
@@ -889,6 +956,8 @@ pub(crate) fn test_row(technique: &str, label: &str, ms: f64, error: f64) -> Ben
             p95: ms,
             p99: ms,
         },
+        submit_ms: Median { median: ms },
+        pipelined_ms: ms,
         shadows_off_frame_ms: Median { median: 1.0 },
         ratio_to_shadows_off: ms,
         pass_ms: BTreeMap::new(),

@@ -222,6 +222,8 @@ impl ViewerState {
             },
             // The timings overlay shows each pass.
             frame_only: false,
+            // The window shows the image egui was handed.
+            image_on_gpu: false,
         }
     }
 

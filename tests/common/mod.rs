@@ -407,12 +407,17 @@ pub fn id_buffers_run_or_fall_back(m: &mut Measurer, what: &str) -> bool {
 
 /// The options the tests are written against: the library's defaults with every light
 /// unshadowed (`technique = none`) unless a test sets a technique. (The library's default
-/// is `auto`, for people; a test names what it tests.)
+/// is `auto`, for people; a test names what it tests.) The planner weighs its decisions for a
+/// CPU rasteriser (`plan.profile = software`, which reads the depth back after the base pass)
+/// on every driver, so that the tests of those decisions assert the same on a GPU, where
+/// `auto` would choose `gpu`; the tests of the `gpu` profile set it.
 pub fn test_options() -> Options {
-    Options {
+    let mut o = Options {
         technique: shadowlab::options::Technique::None,
         ..Options::default()
-    }
+    };
+    o.plan.profile = shadowlab::options::Profile::Software;
+    o
 }
 
 /// [`test_options`] with `sets` applied.

@@ -1,0 +1,56 @@
+//! `plan.profile`: the machine the planner's decisions are weighed for. On a CPU rasteriser
+//! (`software`) fill is dear and a read-back cheap, so the decisions that read the frame's depth
+//! back to save fill pay; on a pipelined GPU (`gpu`) the same read-back stalls the whole
+//! pipeline mid-frame, so no decision reads anything back and a frame never waits on the GL.
+//!
+//! | decision | software | gpu | why |
+//! |---|---|---|---|
+//! | `plan.occlusion` (depth read after the base pass) | on | off | the read-back stalls a GPU |
+//! | `plan.depth_clip` (clip planes fitted to that depth) | on | off | needs the same read-back |
+//! | `plan.depth_bounds_test` | on | on | the GL's own test reads no depth back |
+//!
+//! Every other decision costs CPU work only and is the same under both.
+
+use crate::options::{Options, Profile};
+
+/// The profile `auto` stands for on this GL: `software` where the renderer is a CPU rasteriser.
+pub fn effective(profile: Profile, software_renderer: bool) -> Profile {
+    match profile {
+        Profile::Auto if software_renderer => Profile::Software,
+        Profile::Auto => Profile::Gpu,
+        p => p,
+    }
+}
+
+/// `options` with the decisions its profile turns off turned off, and `plan.profile` set to the
+/// profile it stood for (never `auto`).
+pub fn resolve(options: &Options, software_renderer: bool) -> Options {
+    let mut o = options.clone();
+    o.plan.profile = effective(options.plan.profile, software_renderer);
+    if o.plan.profile == Profile::Gpu {
+        o.plan.occlusion = false;
+        o.plan.depth_clip = false;
+    }
+    o
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn auto_follows_the_renderer_and_gpu_turns_off_every_read_back() {
+        let o = Options::default();
+        let soft = resolve(&o, true);
+        assert_eq!(soft.plan.profile, Profile::Software);
+        assert!(soft.plan.occlusion && soft.plan.depth_clip);
+        let gpu = resolve(&o, false);
+        assert_eq!(gpu.plan.profile, Profile::Gpu);
+        assert!(!gpu.plan.occlusion && !gpu.plan.depth_clip && gpu.plan.depth_bounds_test);
+        let mut forced = o.clone();
+        forced.plan.profile = Profile::Gpu;
+        assert!(!resolve(&forced, true).plan.occlusion);
+        forced.plan.profile = Profile::Software;
+        assert!(resolve(&forced, false).plan.depth_clip);
+    }
+}
