@@ -67,7 +67,9 @@ impl Fence {
         // and only a lost context makes the wait fail.
         loop {
             // SAFETY: the fence is live (deleted only below).
-            let r = unsafe { gl.client_wait_sync(self.0, glow::SYNC_FLUSH_COMMANDS_BIT, 1_000_000_000) };
+            let r = unsafe {
+                gl.client_wait_sync(self.0, glow::SYNC_FLUSH_COMMANDS_BIT, 1_000_000_000)
+            };
             if r != glow::TIMEOUT_EXPIRED {
                 break;
             }

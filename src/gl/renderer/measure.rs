@@ -1,0 +1,235 @@
+//! After the timed frame, when asked: the G-buffer and each light's decision mask.
+
+use super::*;
+impl<'a> FrameRun<'a> {
+    /// The G-buffer and each light's decision mask, when the request asks for masks
+    /// (untimed, after the frame).
+    pub(super) fn measure(
+        &self,
+        maps: &[ViewMap],
+    ) -> (Option<GBuffer>, Vec<Mask>, Vec<HybridStats>) {
+        let gl = self.ctx.gl;
+        let plan = self.ctx.plan;
+        let Some((gtarget, mtarget)) = self.measure_targets.filter(|_| self.request.masks) else {
+            return (None, Vec::new(), Vec::new());
+        };
+        let mut hybrid_stats = Vec::new();
+        gtarget_bind(gl, gtarget);
+        passes::gbuffer::draw(&self.ctx, &self.programs.gbuffer);
+        let gbuffer = read_gbuffer(gl, gtarget);
+        let mut masks = Vec::with_capacity(plan.lights.len() + plan.culled.len());
+        for (pi, lp) in plan.lights.iter().enumerate() {
+            mtarget.bind(gl);
+            set_scissor(gl, None);
+            // SAFETY: clears the mask to "not a receiver"; depth and stencil untouched.
+            unsafe {
+                gl.color_mask(true, true, true, true);
+                gl.clear_color(0.0, 0.0, 0.0, 0.0);
+                gl.clear(glow::COLOR_BUFFER_BIT);
+            }
+            set_scissor(gl, lp.scissor);
+            if let Some(ff) = self.fixed {
+                self.fixed_mask(ff, lp, &self.bindings(maps, pi));
+                set_scissor(gl, None);
+                let mut values = mtarget.read(gl);
+                keep_reached(&mut values, &gbuffer, &self.ctx.scene.lights[lp.light]);
+                masks.push(Mask {
+                    light: lp.light,
+                    width: mtarget.width,
+                    height: mtarget.height,
+                    values,
+                });
+                continue;
+            }
+            match self.volumes_of(lp) {
+                Some(v) if lp.technique == Technique::Hybrid => {
+                    let (stencil, fragments) = self.hybrid_mask(pi, maps, &v, mtarget);
+                    set_scissor(gl, None);
+                    let values = mtarget.read(gl);
+                    hybrid_stats.push(hybrid_stats_of(lp.light, &values, &stencil, fragments));
+                    masks.push(Mask {
+                        light: lp.light,
+                        width: mtarget.width,
+                        height: mtarget.height,
+                        values,
+                    });
+                    continue;
+                }
+                _ if let Some(f) = self.fragments_of(lp) => {
+                    self.subdivision_stencil(lp, &f);
+                    self.mask_over_stencil(lp);
+                }
+                Some(_) => {
+                    self.count_volumes(lp);
+                    self.mask_over_stencil(lp);
+                }
+                None => draw_maps(
+                    &self.ctx,
+                    lp,
+                    &self.bindings(maps, pi),
+                    |v| self.lit_program(v),
+                    (MapPass::Mask, false),
+                ),
+            }
+            set_scissor(gl, None);
+            masks.push(Mask {
+                light: lp.light,
+                width: mtarget.width,
+                height: mtarget.height,
+                values: mtarget.read(gl),
+            });
+        }
+        // Culled lights reach no pixel in view.
+        for &light in &plan.culled {
+            masks.push(Mask {
+                light,
+                width: mtarget.width,
+                height: mtarget.height,
+                values: vec![0; (mtarget.width * mtarget.height) as usize],
+            });
+        }
+        masks.sort_by_key(|m| m.light);
+        (Some(gbuffer), masks, hybrid_stats)
+    }
+
+    /// Light `lp`'s mask where its stencil is zero, after its volumes or fragments.
+    pub(super) fn mask_over_stencil(&self, lp: &LightPlan) {
+        passes::lit::draw_mask(
+            &self.ctx,
+            self.lit_program(LitVariant::plain(true)),
+            lp,
+            &LitShadow::Stencil { test: true },
+            &lp.receivers,
+        );
+    }
+
+    /// A hybrid light's mask, drawn as its frame drew it (mask, counts, the decision), with
+    /// its volume fragments counted with and without the mask on the way. Returns the
+    /// stencil (its top bit: where the map decides) and the two fragment counts.
+    pub(super) fn hybrid_mask(
+        &self,
+        pi: usize,
+        maps: &[ViewMap],
+        v: &LightVolumes<'_>,
+        mtarget: &MaskTarget,
+    ) -> (Vec<u8>, (Option<u64>, Option<u64>)) {
+        let gl = self.ctx.gl;
+        let lp = &self.ctx.plan.lights[pi];
+        let masked = self.ctx.options.hybrid.mask;
+        let bindings = self.bindings(maps, pi);
+        let pass = |kind| {
+            draw_maps(
+                &self.ctx,
+                lp,
+                &bindings,
+                |variant| self.lit_program(variant),
+                (kind, true),
+            )
+        };
+        let volume = &self.programs.volume;
+        let fragments;
+        if masked {
+            passes::lit::clear_marks(gl);
+            pass(MapPass::Mark { overwrite: false });
+            fragments = (
+                passes::hybrid::volume_fragments(&self.ctx, volume, v, (true, lp.scissor)),
+                passes::hybrid::volume_fragments(&self.ctx, volume, v, (false, lp.scissor)),
+            );
+            passes::stencil::draw(&self.ctx, volume, v, lp.scissor, true);
+        } else {
+            passes::stencil::draw(&self.ctx, volume, v, lp.scissor, false);
+            let all = passes::hybrid::volume_fragments(&self.ctx, volume, v, (false, lp.scissor));
+            fragments = (all, all);
+            pass(MapPass::Mark { overwrite: true });
+        }
+        pass(MapPass::Mask);
+        let stencil = debug::read_stencil(gl, mtarget.fbo, mtarget.width, mtarget.height);
+        mtarget.bind(gl);
+        (stencil, fragments)
+    }
+}
+
+impl FrameRun<'_> {
+    /// Sets the mask of light `lp` from the fixed-function passes: its volumes' counts, or its maps.
+    pub(super) fn fixed_mask(
+        &self,
+        ff: &FixedFunction,
+        lp: &LightPlan,
+        bindings: &[(bool, ShadowBinding, &[u32], Option<Scissor>)],
+    ) {
+        let shadow = LitShadow::Stencil { test: true };
+        match self.volumes_of(lp) {
+            _ if let Some(f) = self.fragments_of(lp) => {
+                self.subdivision_stencil(lp, &f);
+                fixed::lit::draw_mask(&self.ctx, ff, lp, &shadow, &lp.receivers);
+            }
+            Some(_) => {
+                self.count_volumes(lp);
+                fixed::lit::draw_mask(&self.ctx, ff, lp, &shadow, &lp.receivers);
+            }
+            None => fixed_maps(&self.ctx, ff, lp, bindings, true),
+        }
+    }
+}
+
+pub(super) fn keep_reached(values: &mut [u8], gbuffer: &GBuffer, light: &crate::scene::Light) {
+    for (i, v) in values.iter_mut().enumerate() {
+        let reached = gbuffer.is_receiver_surface(i) && {
+            let p = glam::Vec3::from_array(gbuffer.position[i]).as_dvec3();
+            let n = glam::Vec3::from_array(gbuffer.normal[i]).as_dvec3();
+            light.reaches(p, n)
+        };
+        if !reached {
+            *v = MaskValue::NotReceiver as u8;
+        }
+    }
+}
+
+/// A hybrid light's stats from its mask values and its stencil after the frame's passes.
+pub(super) fn hybrid_stats_of(
+    light: usize,
+    values: &[u8],
+    stencil: &[u8],
+    (volume_fragments, volume_fragments_unmasked): (Option<u64>, Option<u64>),
+) -> HybridStats {
+    let receiver = |v: u8| v == MaskValue::Lit as u8 || v == MaskValue::Shadowed as u8;
+    let mut stats = HybridStats {
+        light,
+        receiver_pixels: 0,
+        silhouette_pixels: 0,
+        volume_fragments,
+        volume_fragments_unmasked,
+    };
+    for (&v, &s) in values.iter().zip(stencil) {
+        if receiver(v) {
+            stats.receiver_pixels += 1;
+            if s as u32 & passes::lit::MAP_DECIDES == 0 {
+                stats.silhouette_pixels += 1;
+            }
+        }
+    }
+    stats
+}
+
+pub(super) fn gtarget_bind(gl: &glow::Context, t: &GBufferTarget) {
+    // SAFETY: the G-buffer framebuffer is complete.
+    unsafe {
+        gl.bind_framebuffer(glow::FRAMEBUFFER, Some(t.fbo));
+        gl.viewport(0, 0, t.width as i32, t.height as i32);
+    }
+}
+
+pub(super) fn read_gbuffer(gl: &glow::Context, t: &GBufferTarget) -> GBuffer {
+    let position = t.read(gl, 0);
+    let normal = t.read(gl, 1);
+    GBuffer {
+        width: t.width,
+        height: t.height,
+        kind: normal
+            .iter()
+            .map(|n| n[3].round().clamp(0.0, 2.0) as u8)
+            .collect(),
+        position: position.iter().map(|p| [p[0], p[1], p[2]]).collect(),
+        normal: normal.iter().map(|n| [n[0], n[1], n[2]]).collect(),
+    }
+}

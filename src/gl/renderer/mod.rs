@@ -1,0 +1,889 @@
+//! Executes a frame's plan with GL: owns the programs, the scene's GPU copy, the framebuffer and
+//! the shadow maps, runs the passes in the paper's order and returns a [`Frame`].
+//!
+//! Order (paper 3.1): for each shadow-mapped light, its views into depth textures (drawn into the
+//! frame's depth buffer and copied, or rendered straight into the texture); then the unlit world;
+//! then each light's additive pass. Masks and the G-buffer, when asked for, are drawn after the
+//! timed frame.
+
+use super::caps::{self, Caps};
+use super::debug;
+use super::depth_reduce::DepthReducer;
+use super::extrusion::{ExtrudedDraw, Extrusions};
+use super::fixed::{self, FixedFunction};
+use super::fragments::{FragmentBuffers, LightFragmentDraw};
+use super::id_tables::IdTables;
+use super::legacy::Legacy;
+use super::passes::lit::{LitShadow, ShadowBinding};
+use super::passes::shadow_map::{DepthTarget, copies_from_frame, copy_depth};
+use super::passes::{self, PassContext, set_scissor};
+use super::priority_mips;
+use super::program::{Program, ProgramError, sources};
+use super::shadow_maps::{MapKey, ShadowMaps};
+use super::syncs::{self, SyncKind};
+use super::target::{Framebuffer, GBufferTarget, MaskTarget};
+use super::timing::PassTimer;
+use super::upload::GpuScene;
+use super::volumes::{LightVolumes, VolumeBuffers};
+use crate::frame::{CacheStats, Syncs};
+use crate::frame::{Frame, HybridStats, Step, StepKind};
+use crate::geometry::projection::cube_face_view;
+use crate::images::{GBuffer, Mask, MaskValue, Rgba, StencilImage};
+use crate::options::{
+    Compare, CompareResult, DepthBits, Filter, MapBuffer, Options, Outside, Pipeline,
+    StencilPasses, StencilWrap, Technique, TexgenSpace, VolumeShading,
+};
+use crate::plan::auto::AutoMemory;
+use crate::plan::occlusion::DepthPyramid;
+use crate::plan::pass::{PassId, Stage};
+use crate::plan::planner::{DepthNeed, Planner};
+use crate::plan::scissor::Scissor;
+use crate::plan::volume_draws::VolumeStats;
+use crate::plan::{LightPlan, Plan};
+use crate::plan::{fallback, fixed_function, profile};
+use crate::scene::{Camera, Scene};
+use crate::shadow::views::ViewKind;
+use crate::truth::subdivision::Geometry;
+use glow::HasContext;
+use std::collections::HashMap;
+use std::ops::ControlFlow;
+use std::rc::Rc;
+use std::sync::Arc;
+use std::time::Instant;
+use thiserror::Error;
+
+/// Whether a frame goes on, or stopped after a walkthrough step with the frame so far.
+type Flow<T> = Result<ControlFlow<Frame, T>, RenderError>;
+
+/// Goes on with the value, or returns the stopped frame as the frame (in
+/// [`FrameRun::run`]).
+macro_rules! or_stopped {
+    ($flow:expr) => {
+        match $flow? {
+            ControlFlow::Continue(v) => v,
+            ControlFlow::Break(frame) => return Ok(frame),
+        }
+    };
+}
+
+/// Goes on with the value, or passes the stopped frame up.
+macro_rules! go_on {
+    ($flow:expr) => {
+        match $flow? {
+            ControlFlow::Continue(v) => v,
+            ControlFlow::Break(frame) => return Ok(ControlFlow::Break(frame)),
+        }
+    };
+}
+
+mod lights;
+mod maps;
+mod measure;
+mod programs;
+mod volumes;
+
+use maps::{MapPass, draw_maps, fixed_maps};
+pub use programs::FILL_SHADE;
+use programs::{LitVariant, Programs, lit_defines};
+
+#[derive(Debug, Error)]
+pub enum RenderError {
+    #[error(transparent)]
+    Program(#[from] ProgramError),
+    #[error("GL: {0}")]
+    Gl(String),
+    #[error("no scene is loaded")]
+    NoScene,
+    #[error("{0}")]
+    Unsupported(String),
+    #[error(transparent)]
+    VolumeDraws(#[from] crate::plan::volume_draws::VolumeDrawError),
+    #[error(transparent)]
+    Fragments(#[from] super::fragments::FragmentError),
+}
+
+/// What a frame should produce besides its image and timings.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct FrameRequest {
+    /// The G-buffer and each light's decision mask (drawn after the timed frame).
+    pub masks: bool,
+    /// Stop after this step (walkthrough): the frame then holds the steps so far and the
+    /// buffer the step wrote as `step_image`.
+    pub stop_after: Option<usize>,
+    /// Read this light's stencil counts right after its volume pass.
+    pub stencil_of: Option<usize>,
+    /// Debug drawing over the finished frame (untimed).
+    pub overlays: Overlays,
+    /// Time the frame only, not each pass, where per-pass times need glFinish between passes
+    /// (no timer queries, e.g. llvmpipe): benchmarks take frame times this way.
+    pub frame_only: bool,
+    /// Leave the frame's image on the GPU: nothing is read back and nothing waits for the GL
+    /// (`Frame::image` is empty, `frame_ms` ends at submission); the viewer presents the
+    /// frame's colour buffer, `bench` waits on a fence of its own. Masks, a stencil read or a
+    /// walkthrough step still read what they ask for.
+    pub image_on_gpu: bool,
+}
+
+/// Debug drawing over a frame.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct Overlays {
+    /// Shadow volumes, translucent: depth-fail parts red, depth-pass parts green.
+    pub volumes: bool,
+    /// The silhouette edges the volumes were extruded from, yellow.
+    pub silhouettes: bool,
+    /// The shadow map's texel grid on lit receivers.
+    pub texel_grid: bool,
+    /// Whose volumes and silhouettes to draw: one light, or every light when `None`.
+    pub light: Option<usize>,
+}
+
+/// Records the steps of a frame and says when to stop.
+struct Stepper {
+    stop: Option<usize>,
+    steps: Vec<Step>,
+}
+
+impl Stepper {
+    /// Records a step; true when it is the one to stop after.
+    fn record(&mut self, kind: StepKind, lp: Option<&LightPlan>, face: Option<usize>) -> bool {
+        self.steps.push(Step {
+            kind,
+            light: lp.map(|l| l.light),
+            face,
+            technique: lp.map(|l| l.technique),
+        });
+        self.stop == Some(self.steps.len() - 1)
+    }
+}
+
+/// The texture a shadow-map view was rendered into in the last frame.
+#[derive(Debug, Clone, Copy)]
+struct LastMap {
+    light: usize,
+    view: usize,
+    texture: glow::Texture,
+    /// The ID buffer's colour, shown instead of the depth.
+    ids: Option<glow::Texture>,
+    cube: bool,
+    size: u32,
+}
+
+/// Counts of what a renderer keeps across frames ([`Renderer::held`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub struct Held {
+    /// Shadow-map and ID-buffer textures.
+    pub map_textures: usize,
+    /// Volume parts built and kept for the frames that draw them again.
+    pub volume_parts: usize,
+    /// Depth-pass parts' clip planes fitted to the last depth buffer.
+    pub depth_fits: usize,
+}
+
+pub struct Renderer {
+    gl: Arc<glow::Context>,
+    pub caps: Caps,
+    programs: Programs,
+    target: Framebuffer,
+    gpu: Option<GpuScene>,
+    timer: PassTimer,
+    shadow_maps: ShadowMaps,
+    /// Per-triangle ID and priority tables (`shadow_map.buffer`).
+    id_tables: IdTables,
+    /// Every light's shadow-volume buffers.
+    volume_buffers: VolumeBuffers,
+    /// Caster groups' meshes for volumes the GPU extrudes.
+    extrusions: Extrusions,
+    /// Every subdivided light's shadowed fragments (`technique = subdivision`).
+    fragments: FragmentBuffers,
+    /// Created on the first frame that asks for masks.
+    measure_targets: Option<(GBufferTarget, MaskTarget)>,
+    /// Core profile draws need a bound VAO even without attributes (full-screen triangles).
+    empty_vao: glow::VertexArray,
+    /// Created on the first frame that reduces its depth for the planner.
+    depth_reducer: Option<DepthReducer>,
+    /// The shadow-map views of the last frame, for the depth-map debug view.
+    last_maps: Vec<LastMap>,
+    /// The planner and what it keeps across frames (costs for `auto`, caster groups, the
+    /// depth it read, volume draws).
+    planner: Planner,
+    /// The legacy entry points, on a compatibility-profile context (`gl.pipeline =
+    /// fixed_function`).
+    fixed: Option<FixedFunction>,
+}
+
+/// What one view's depth pass draws into and reads.
+#[derive(Clone, Copy)]
+struct MapBuffers {
+    depth: glow::Texture,
+    /// The ID buffer's colour texture.
+    ids: Option<glow::Texture>,
+    /// The per-triangle table of ID and priority buffers.
+    table: Option<glow::Texture>,
+    buffer: MapBuffer,
+}
+
+/// One shadow-mapped view's texture, by light plan and view index.
+struct ViewMap {
+    plan_index: usize,
+    view_index: usize,
+    /// What the lit pass reads: the depth texture, or the ID buffer's colour.
+    texture: glow::Texture,
+    /// The per-triangle table of ID and priority buffers.
+    table: Option<glow::Texture>,
+}
+
+impl Renderer {
+    /// Compiles the programs and probes the GL for a frame of `width`×`height`.
+    pub fn new(gl: Arc<glow::Context>, width: u32, height: u32) -> Result<Renderer, RenderError> {
+        let target = Framebuffer::new(&gl, width, height).map_err(RenderError::Gl)?;
+        let caps = caps::probe(&gl, target.depth_stencil_bits(&gl));
+        Self::with_caps(gl, target, caps)
+    }
+
+    /// A second renderer on this one's context that takes its probed capabilities rather than
+    /// probing again: the timer-query check's verdict can differ from one probe to the next
+    /// on llvmpipe, and renderers compared in one run must time their passes alike.
+    pub fn sibling(&self, width: u32, height: u32) -> Result<Renderer, RenderError> {
+        let target = Framebuffer::new(&self.gl, width, height).map_err(RenderError::Gl)?;
+        Self::with_caps(self.gl.clone(), target, self.caps.clone())
+    }
+
+    fn with_caps(
+        gl: Arc<glow::Context>,
+        target: Framebuffer,
+        caps: caps::Caps,
+    ) -> Result<Renderer, RenderError> {
+        let programs = Programs::new(&gl)?;
+        // SAFETY: creating an empty vertex array object.
+        let empty_vao = unsafe { gl.create_vertex_array() }.map_err(RenderError::Gl)?;
+        let timer = PassTimer::new(caps.has("timer_query"));
+        Ok(Renderer {
+            gl,
+            caps,
+            programs,
+            target,
+            gpu: None,
+            timer,
+            shadow_maps: ShadowMaps::default(),
+            id_tables: IdTables::default(),
+            volume_buffers: VolumeBuffers::default(),
+            extrusions: Extrusions::default(),
+            fragments: FragmentBuffers::default(),
+            measure_targets: None,
+            empty_vao,
+            depth_reducer: None,
+            last_maps: Vec::new(),
+            planner: Planner::default(),
+            fixed: None,
+        })
+    }
+
+    /// Lets frames with `gl.pipeline = fixed_function` draw through `legacy` (loaded from this
+    /// renderer's context, which must be a compatibility profile).
+    pub fn use_legacy(&mut self, legacy: Rc<Legacy>) -> Result<(), RenderError> {
+        legacy.check(&self.gl).map_err(RenderError::Unsupported)?;
+        if let Some(old) = self.fixed.take() {
+            old.delete(&self.gl);
+        }
+        self.fixed = Some(FixedFunction::new(&self.gl, legacy).map_err(RenderError::Gl)?);
+        Ok(())
+    }
+
+    pub fn gl(&self) -> &glow::Context {
+        &self.gl
+    }
+
+    /// A shared handle to the context (for callers that outlive a borrow of the renderer).
+    pub fn gl_handle(&self) -> Arc<glow::Context> {
+        self.gl.clone()
+    }
+
+    /// Depth textures currently allocated for shadow maps.
+    pub fn shadow_map_textures(&self) -> usize {
+        self.shadow_maps.texture_count()
+    }
+
+    /// What the renderer keeps across frames, counted: long runs hold these flat.
+    pub fn held(&self) -> Held {
+        let (volume_parts, depth_fits) = self.planner.held_volumes();
+        Held {
+            map_textures: self.shadow_maps.texture_count(),
+            volume_parts,
+            depth_fits,
+        }
+    }
+
+    /// Drops the frusta static omni lights kept (`plan.keep_frusta`): the next frame chooses
+    /// them afresh for its own view.
+    pub fn forget_kept_frusta(&mut self) {
+        self.planner.forget_kept_frusta();
+    }
+
+    /// Uploads a scene, replacing the previous one.
+    pub fn load_scene(&mut self, scene: &Scene) -> Result<(), RenderError> {
+        if let Some(old) = self.gpu.take() {
+            old.delete(&self.gl);
+        }
+        let gpu = GpuScene::new(&self.gl, scene, self.caps.max_texture_size.max(1) as u32)
+            .map_err(RenderError::Gl)?;
+        self.gpu = Some(gpu);
+        // Cached maps and volumes belong to the old scene.
+        self.shadow_maps.forget();
+        self.volume_buffers.delete(&self.gl);
+        self.extrusions.delete(&self.gl);
+        self.fragments.delete(&self.gl);
+        self.planner.forget();
+        Ok(())
+    }
+
+    /// A frame of `width`×`height`, with storage of at least `alloc` and 32F depth if asked.
+    fn ensure_target(
+        &mut self,
+        width: u32,
+        height: u32,
+        alloc: (u32, u32),
+        float_depth: bool,
+    ) -> Result<(), RenderError> {
+        let t = &self.target;
+        let fits = t.width == width
+            && t.height == height
+            && t.alloc.0 >= alloc.0
+            && t.alloc.1 >= alloc.1
+            && t.float_depth == float_depth;
+        if !fits {
+            let new = Framebuffer::with_storage(&self.gl, width, height, alloc, float_depth)
+                .map_err(RenderError::Gl)?;
+            self.target.delete(&self.gl);
+            self.target = new;
+            if let Some((g, m)) = self.measure_targets.take() {
+                g.delete(&self.gl);
+                m.delete(&self.gl);
+            }
+        }
+        Ok(())
+    }
+
+    /// Plans and renders one frame of `scene` (which must be the loaded one).
+    pub fn render(&mut self, scene: &Scene, options: &Options) -> Result<Frame, RenderError> {
+        self.render_with(scene, options, FrameRequest::default())
+    }
+
+    /// Plans and renders one frame, with what `request` asks for besides the image.
+    pub fn render_with(
+        &mut self,
+        scene: &Scene,
+        options: &Options,
+        request: FrameRequest,
+    ) -> Result<Frame, RenderError> {
+        self.render_at(scene, &scene.camera, options, request)
+    }
+
+    /// Plans and renders one frame seen from `camera` instead of the scene's camera.
+    pub fn render_at(
+        &mut self,
+        scene: &Scene,
+        camera: &Camera,
+        options: &Options,
+        request: FrameRequest,
+    ) -> Result<Frame, RenderError> {
+        let (before, start) = (syncs::counted(), Instant::now());
+        let caps = self.caps_for(options)?;
+        let (options, fallbacks) = fixed_function::resolve_all(options, |f| caps.has(f));
+        let options = profile::resolve(&options, caps.is_software());
+        if options.gl.pipeline == Pipeline::FixedFunction && self.fixed.is_none() {
+            return Err(RenderError::Unsupported(
+                "gl.pipeline = fixed_function needs a compatibility-profile context with the \
+                 legacy entry points (EGL or OSMesa on Mesa give one; the window path and \
+                 OpenGL ES do not)"
+                    .into(),
+            ));
+        }
+        self.timer.allow_queries(caps.has("timer_query"));
+        let options = &options;
+        let plan = self.planner.plan(scene, camera, options);
+        let frame_only = request.frame_only;
+        let mut frame = self.execute(scene, &plan, options, request, start)?;
+        frame.fallbacks = fallbacks;
+        frame.cache.caster_groups_built = self.planner.take_groups_rebuilt();
+        // Frame-only timing has no per-light passes to learn from.
+        if !frame_only {
+            self.planner.record_costs(&plan, &frame.passes);
+        }
+        frame.syncs = syncs::counted().since(&before);
+        Ok(frame)
+    }
+
+    /// The probed capabilities less the features `gl.disable` names.
+    pub fn caps_for(&self, options: &Options) -> Result<Caps, RenderError> {
+        let disabled = fallback::disabled(options).map_err(RenderError::Unsupported)?;
+        Ok(self.caps.with_disabled(&disabled))
+    }
+
+    /// A fence after every command sent so far: wait on it to know a frame left on the GPU
+    /// (`FrameRequest::image_on_gpu`) is done.
+    pub fn fence(&self) -> Result<syncs::Fence, RenderError> {
+        syncs::Fence::insert(&self.gl).map_err(RenderError::Gl)
+    }
+
+    /// The GL's error flag since the last check, as an error: frames that wait for nothing do
+    /// not check it, so a caller drawing many of them checks once after (counted).
+    pub fn check_errors(&self) -> Result<(), RenderError> {
+        check_errors(&self.gl)
+    }
+
+    /// What `technique = auto` has measured so far.
+    pub fn auto_memory(&self) -> &AutoMemory {
+        self.planner.memory()
+    }
+
+    /// Where `technique = auto` takes each light's costs from: the frames' pass times
+    /// (the default), or costs the caller supplies (tests, a cost model of another machine).
+    pub fn set_cost_source(&mut self, source: crate::plan::auto::CostSource) {
+        self.planner.set_cost_source(source);
+    }
+
+    /// Gives `auto` the last frame's sampled errors (its masks against `truth::sampled`): the
+    /// GL layer measures no error itself.
+    pub fn record_errors(
+        &mut self,
+        samples: &[crate::truth::sampled::LightSample],
+        options: &Options,
+    ) {
+        self.planner.record_errors(samples, options);
+    }
+
+    /// The one limit no fallback lifts: a shadow map larger than the GL's textures. (Choices
+    /// that need a missing feature were replaced before planning: `plan::fallback`.)
+    fn check_support(&self, options: &Options, plan: &Plan) -> Result<(), RenderError> {
+        let size = plan.largest_map(options.shadow_map.size);
+        let max = self.caps.max_texture_size.max(1) as u32;
+        if plan.any_maps() && size > max {
+            return Err(RenderError::Unsupported(format!(
+                "a shadow map of {size}x{size} (shadow_map.size, or one of several frusta) \
+                 exceeds GL_MAX_TEXTURE_SIZE {max}"
+            )));
+        }
+        if options.gl.pipeline == Pipeline::FixedFunction {
+            for (t, why) in [
+                (Technique::Hybrid, "classifies pixels in a shader"),
+                (Technique::Tsm, "writes the light's own depth from a shader"),
+            ] {
+                if plan.any(t) {
+                    return Err(RenderError::Unsupported(format!(
+                        "technique = {t} {why}: it needs gl.pipeline = shaders"
+                    )));
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// Runs the passes of `plan` (made from `options` with their fallbacks already taken),
+    /// then, untimed, the measurement passes the request asks for.
+    fn execute(
+        &mut self,
+        scene: &Scene,
+        plan: &Plan,
+        options: &Options,
+        request: FrameRequest,
+        start: Instant,
+    ) -> Result<Frame, RenderError> {
+        self.check_support(options, plan)?;
+        let copy = self.prepare_targets(plan, options, request)?;
+        let gl_arc = self.gl.clone();
+        let gl: &glow::Context = &gl_arc;
+        // Compile what this frame needs before borrowing the programs for the passes.
+        let variants = self.lit_variants(gl, plan, options, request)?;
+        // Animated models' vertices go up before anything draws them.
+        let models_uploaded = self
+            .gpu
+            .as_mut()
+            .ok_or(RenderError::NoScene)?
+            .sync_models(gl, scene);
+        let gpu = self.gpu.as_ref().ok_or(RenderError::NoScene)?;
+        self.timer.start_frame(!request.frame_only);
+        self.last_maps.clear();
+        passes::reset_state(gl);
+        let run = FrameRun {
+            ctx: PassContext {
+                gl,
+                scene,
+                gpu,
+                plan,
+                options,
+            },
+            programs: &self.programs,
+            variants,
+            target: &self.target,
+            measure_targets: self.measure_targets.as_ref(),
+            timer: &mut self.timer,
+            shadow_maps: &mut self.shadow_maps,
+            id_tables: &mut self.id_tables,
+            planner: &mut self.planner,
+            volume_buffers: &mut self.volume_buffers,
+            extrusions: &mut self.extrusions,
+            fragments: &mut self.fragments,
+            extruded: HashMap::new(),
+            depth_reducer: &mut self.depth_reducer,
+            last_maps: &mut self.last_maps,
+            empty_vao: self.empty_vao,
+            request,
+            copy,
+            stepper: Stepper {
+                stop: request.stop_after,
+                steps: Vec::new(),
+            },
+            cache: CacheStats {
+                models_uploaded,
+                ..CacheStats::default()
+            },
+            start,
+            volume_stats: Vec::new(),
+            fixed: self
+                .fixed
+                .as_ref()
+                .filter(|_| options.gl.pipeline == Pipeline::FixedFunction),
+        };
+        run.run()
+    }
+
+    /// Sizes the frame (with room for a shadow map copied from it) and makes the measurement
+    /// targets when masks are asked for; returns whether shadow maps are copied from the frame.
+    fn prepare_targets(
+        &mut self,
+        plan: &Plan,
+        options: &Options,
+        request: FrameRequest,
+    ) -> Result<bool, RenderError> {
+        let sm = &options.shadow_map;
+        let copy = plan.any_maps() && copies_from_frame(sm);
+        let largest = plan.largest_map(sm.size);
+        let alloc = if copy { (largest, largest) } else { (0, 0) };
+        self.ensure_target(
+            plan.camera.width,
+            plan.camera.height,
+            alloc,
+            copy && sm.depth_bits == DepthBits::D32f,
+        )?;
+        if request.masks && self.measure_targets.is_none() {
+            let g = GBufferTarget::new(&self.gl, self.target.width, self.target.height)
+                .map_err(RenderError::Gl)?;
+            let m = MaskTarget::new(&self.gl, &self.target).map_err(RenderError::Gl)?;
+            self.measure_targets = Some((g, m));
+        }
+        Ok(copy)
+    }
+
+    /// The lit programs this frame may use, compiled on first use, by variant.
+    fn lit_variants(
+        &mut self,
+        gl: &glow::Context,
+        plan: &Plan,
+        options: &Options,
+        request: FrameRequest,
+    ) -> Result<HashMap<LitVariant, String>, RenderError> {
+        let shadow_mapped = plan.any_maps();
+        let hybrids = plan.any(Technique::Hybrid);
+        let trapezoids = plan.any(Technique::Tsm);
+        // The buffers other than depth some light's standard maps store (`auto` may choose
+        // one per light).
+        let mut buffers: Vec<MapBuffer> = Vec::new();
+        for lp in &plan.lights {
+            if lp.technique == Technique::ShadowMap
+                && lp.buffer != MapBuffer::Depth
+                && !buffers.contains(&lp.buffer)
+            {
+                self.programs.depth_buffer(gl, lp.buffer)?;
+                buffers.push(lp.buffer);
+            }
+        }
+        let mut variants = HashMap::new();
+        for (shadow_map, cube, six, hybrid, warp_depth) in [
+            (false, false, false, false, false),
+            (true, false, false, false, false),
+            (true, true, false, false, false),
+            (true, false, true, false, false),
+            (true, false, false, true, false),
+            (true, true, false, true, false),
+            (true, false, true, true, false),
+            (true, false, false, false, true),
+            (true, false, true, false, true),
+        ] {
+            for mask in [false, true] {
+                if (shadow_map && !shadow_mapped)
+                    || (mask && !request.masks)
+                    || (hybrid && !hybrids)
+                    || (warp_depth && !trapezoids)
+                {
+                    continue;
+                }
+                let v = LitVariant {
+                    shadow_map,
+                    cube,
+                    six,
+                    mask,
+                    hybrid,
+                    warp_depth,
+                    buffer: MapBuffer::Depth,
+                };
+                // ID and priority buffers are read as 2D maps by standard maps only.
+                let buffered = shadow_map && !cube && !hybrid && !warp_depth;
+                let with_buffers = buffers
+                    .iter()
+                    .filter(|_| buffered)
+                    .map(|&buffer| LitVariant { buffer, ..v });
+                for v in std::iter::once(v).chain(with_buffers) {
+                    let defines = lit_defines(options, v, request.overlays.texel_grid);
+                    let key = self.programs.lit_variant(gl, &defines)?;
+                    variants.insert(v, key);
+                }
+            }
+        }
+        Ok(variants)
+    }
+
+    /// How many depth images the last frame made for `light`: 1 for a spot, 6 for an omni
+    /// light (six spots, or the six faces of its cube), 0 without shadow maps.
+    pub fn shadow_map_views(&self, light: usize) -> usize {
+        self.last_maps
+            .iter()
+            .filter(|m| m.light == light)
+            .map(|m| if m.cube { 6 } else { 1 })
+            .sum()
+    }
+
+    /// The last frame's shadow map `k` of `light` (see [`Self::shadow_map_views`]) as grey.
+    pub fn shadow_map_image(&self, light: usize, k: usize) -> Option<Rgba> {
+        let gl: &glow::Context = &self.gl;
+        let mut i = 0;
+        for m in self.last_maps.iter().filter(|m| m.light == light) {
+            let faces = if m.cube { 6 } else { 1 };
+            if k < i + faces {
+                let face = m.cube.then_some(k - i);
+                if let Some(ids) = m.ids {
+                    return Some(debug::id_image(gl, ids, m.size));
+                }
+                let depth = debug::read_depth_texture(gl, m.texture, face, m.size);
+                let _ = m.view;
+                return Some(debug::depth_image(&depth, m.size, m.size));
+            }
+            i += faces;
+        }
+        None
+    }
+
+    /// Draws the last frame into the default framebuffer of a window, scaled to `width`×`height`.
+    pub fn present_to_default(&self, width: u32, height: u32) {
+        let gl: &glow::Context = &self.gl;
+        let (fw, fh) = self.target.alloc;
+        // SAFETY: the default framebuffer exists on window contexts; state is set explicitly.
+        unsafe {
+            gl.bind_framebuffer(glow::READ_FRAMEBUFFER, Some(self.target.fbo));
+            gl.bind_framebuffer(glow::DRAW_FRAMEBUFFER, None);
+            gl.blit_framebuffer(
+                0,
+                0,
+                self.target.width.min(fw) as i32,
+                self.target.height.min(fh) as i32,
+                0,
+                0,
+                width as i32,
+                height as i32,
+                glow::COLOR_BUFFER_BIT,
+                glow::LINEAR,
+            );
+            gl.bind_framebuffer(glow::FRAMEBUFFER, None);
+        }
+    }
+}
+
+/// One frame being drawn: the parts of the renderer the passes use, and what the frame has
+/// produced so far.
+struct FrameRun<'a> {
+    ctx: PassContext<'a>,
+    programs: &'a Programs,
+    variants: HashMap<LitVariant, String>,
+    target: &'a Framebuffer,
+    measure_targets: Option<&'a (GBufferTarget, MaskTarget)>,
+    timer: &'a mut PassTimer,
+    shadow_maps: &'a mut ShadowMaps,
+    id_tables: &'a mut IdTables,
+    planner: &'a mut Planner,
+    volume_buffers: &'a mut VolumeBuffers,
+    extrusions: &'a mut Extrusions,
+    fragments: &'a mut FragmentBuffers,
+    /// Per light, the groups the GPU extrudes this frame.
+    extruded: HashMap<usize, Vec<ExtrudedDraw>>,
+    depth_reducer: &'a mut Option<DepthReducer>,
+    last_maps: &'a mut Vec<LastMap>,
+    empty_vao: glow::VertexArray,
+    request: FrameRequest,
+    /// Shadow maps are drawn into the frame and copied into their textures.
+    copy: bool,
+    stepper: Stepper,
+    cache: CacheStats,
+    start: Instant,
+    volume_stats: Vec<VolumeStats>,
+    /// The legacy pipeline, when the frame draws with it.
+    fixed: Option<&'a FixedFunction>,
+}
+
+impl<'a> FrameRun<'a> {
+    /// The passes in the paper's order, then the untimed overlays and measurements.
+    fn run(mut self) -> Result<Frame, RenderError> {
+        // Shadow maps of every shadow-mapped light first (paper 3.1).
+        let maps = or_stopped!(self.shadow_map_passes());
+        or_stopped!(self.base_pass());
+        self.volume_draws()?;
+        self.subdivisions()?;
+        let stencil = or_stopped!(self.light_passes(&maps));
+        set_scissor(self.ctx.gl, None);
+        let gl = self.ctx.gl;
+        let passes = self.timer.finish(gl);
+        // Only a caller that wants pixels makes the frame wait: the read-back would anyway.
+        let completed = !self.request.image_on_gpu || self.request.masks;
+        if completed {
+            syncs::finish(gl);
+        }
+        let frame_ms = self.start.elapsed().as_secs_f64() * 1e3;
+        self.overlays();
+        if completed {
+            check_errors(gl)?;
+        }
+        let (width, height) = (self.target.width, self.target.height);
+        let image = match self.request.image_on_gpu {
+            true => Rgba {
+                width: 0,
+                height: 0,
+                data: Vec::new(),
+            },
+            false => self.color_image(),
+        };
+        let (gbuffer, masks, hybrid) = self.measure(&maps);
+        let plan = self.ctx.plan;
+        Ok(Frame {
+            image,
+            width,
+            height,
+            completed,
+            view_proj: plan.camera.view_proj,
+            passes,
+            frame_ms,
+            gbuffer,
+            masks,
+            volumes: self.volume_stats,
+            steps: self.stepper.steps,
+            step_image: None,
+            stencil,
+            plan_stats: plan.stats.clone(),
+            cache: self.cache,
+            fallbacks: Vec::new(),
+            hybrid,
+            syncs: Syncs::default(),
+        })
+    }
+
+    fn lit_program(&self, v: LitVariant) -> &Program {
+        &self.programs.lit[&self.variants[&v]]
+    }
+
+    /// Records a step; the stopped frame when it is the one to stop after, with the image
+    /// `image` makes of the buffer the step wrote.
+    fn step(
+        &mut self,
+        kind: StepKind,
+        lp: Option<&LightPlan>,
+        face: Option<usize>,
+        image: impl FnOnce(&Self) -> Rgba,
+    ) -> Flow<()> {
+        if !self.stepper.record(kind, lp, face) {
+            return Ok(ControlFlow::Continue(()));
+        }
+        let image = image(self);
+        Ok(ControlFlow::Break(self.stopped(image)))
+    }
+
+    /// The frame's colour buffer as an image.
+    fn color_image(&self) -> Rgba {
+        Rgba {
+            width: self.target.width,
+            height: self.target.height,
+            data: self.target.read_rgba(self.ctx.gl),
+        }
+    }
+
+    /// The frame as it stands after a walkthrough step, with that step's buffer as an image.
+    fn stopped(&mut self, image: Rgba) -> Frame {
+        let gl = self.ctx.gl;
+        let passes = self.timer.finish(gl);
+        syncs::finish(gl);
+        let plan = self.ctx.plan;
+        Frame {
+            image: self.color_image(),
+            width: self.target.width,
+            height: self.target.height,
+            completed: true,
+            view_proj: plan.camera.view_proj,
+            passes,
+            frame_ms: self.start.elapsed().as_secs_f64() * 1e3,
+            gbuffer: None,
+            masks: Vec::new(),
+            volumes: std::mem::take(&mut self.volume_stats),
+            steps: std::mem::take(&mut self.stepper.steps),
+            step_image: Some(image),
+            stencil: None,
+            plan_stats: plan.stats.clone(),
+            cache: CacheStats::default(),
+            fallbacks: Vec::new(),
+            hybrid: Vec::new(),
+            syncs: Syncs::default(),
+        }
+    }
+}
+
+/// The fixed-function pipeline's mask marks every receiver fragment it draws (legacy lighting
+/// reaches per vertex): pixels whose surface the light does not reach (range, cone, facing,
+/// judged as the shader path and the reference judge them) become "not a receiver".
+/// The GL's error flag, as the frame's error (counted: most drivers finish the commands queued
+/// before they can answer).
+fn check_errors(gl: &glow::Context) -> Result<(), RenderError> {
+    // SAFETY: error query only.
+    let error = unsafe { gl.get_error() };
+    syncs::count(SyncKind::ErrorCheck);
+    match error {
+        glow::NO_ERROR => Ok(()),
+        e => Err(RenderError::Gl(format!(
+            "the frame raised GL error 0x{e:x}"
+        ))),
+    }
+}
+
+impl Drop for Renderer {
+    fn drop(&mut self) {
+        let gl_arc = self.gl.clone();
+        let gl: &glow::Context = &gl_arc;
+        if let Some(g) = self.gpu.take() {
+            g.delete(gl);
+        }
+        self.programs.delete(gl);
+        self.target.delete(gl);
+        self.shadow_maps.delete(gl);
+        self.id_tables.delete(gl);
+        self.volume_buffers.delete(gl);
+        self.extrusions.delete(gl);
+        self.fragments.delete(gl);
+        if let Some((g, m)) = self.measure_targets.take() {
+            g.delete(gl);
+            m.delete(gl);
+        }
+        if let Some(r) = self.depth_reducer.take() {
+            r.delete(gl);
+        }
+        self.timer.delete(gl);
+        if let Some(f) = self.fixed.take() {
+            f.delete(gl);
+        }
+        // SAFETY: deleting our own VAO once.
+        unsafe { gl.delete_vertex_array(self.empty_vao) };
+    }
+}
