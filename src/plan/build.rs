@@ -13,7 +13,7 @@ use crate::options::{
 };
 use crate::scene::{Camera, Light, LightKind, Scene, SurfaceOwner};
 use crate::shadow::frusta;
-use crate::shadow::views::{Rect, ViewKind, shadow_views};
+use crate::shadow::views::{Rect, ShadowView, ViewKind, shadow_views};
 use crate::shadow::volume::{self, CasterGroup, CasterGroups, Counting, PieceRef};
 use crate::shadow::warp::{self, WarpInput};
 use crate::truth::subdivision::Geometry;
@@ -576,37 +576,7 @@ impl FrameFacts<'_> {
         for vi in 0..plan.views.len() {
             let view = &plan.views[vi];
             let mut drawn = self.map_casters(l, view.kind, &view.view_proj());
-            let lit: Vec<u32> = match (view.kind, view.part) {
-                // One of several frusta lights only the receivers in its cell.
-                (ViewKind::Face(f), Some(part)) => {
-                    let on_face = footprints[f].get_or_insert_with(|| {
-                        plan.receivers
-                            .iter()
-                            .map(|&s| {
-                                let b = &self.scene.surfaces[s as usize].bounds;
-                                frusta::footprint(l.position, f, b)
-                            })
-                            .collect()
-                    });
-                    plan.receivers
-                        .iter()
-                        .zip(on_face.iter())
-                        .filter(|(_, r)| r.is_some_and(|r| r.intersection(&part.cell).is_some()))
-                        .map(|(&s, _)| s)
-                        .collect()
-                }
-                (ViewKind::Face(f), None) if on && p.cull_receivers => {
-                    let pyramid = cull::face_pyramid(l.position, f);
-                    plan.receivers
-                        .iter()
-                        .copied()
-                        .filter(|&s| {
-                            pyramid.intersects_aabb(&self.scene.surfaces[s as usize].bounds)
-                        })
-                        .collect()
-                }
-                _ => plan.receivers.clone(),
-            };
+            let lit = self.view_receivers(l, view, &plan.receivers, &mut footprints);
             if let Some(kind) = plan.technique.warp() {
                 self.warp_view(plan, vi, kind, (&lit, &mut drawn), stats);
             }
@@ -620,15 +590,7 @@ impl FrameFacts<'_> {
             plan.view_keys.push(key);
             plan.view_scissors.push(rect);
         }
-        plan.merged = on
-            && p.merge_faces
-            && plan.views.iter().all(|v| v.part.is_none())
-            && self.options.shadow_map.outside != Outside::ClipPlanes
-            && plan.views.len() == 6
-            && plan
-                .views
-                .iter()
-                .all(|v| matches!(v.kind, ViewKind::Face(_)));
+        plan.merged = self.merges_faces(&plan.views);
         if on && p.cull_lights && plan.view_casters.iter().all(|c| c.is_empty()) {
             plan.views.clear();
             plan.view_receivers.clear();
@@ -638,6 +600,60 @@ impl FrameFacts<'_> {
             return Some("no caster in range");
         }
         None
+    }
+
+    /// The receivers view `view` of light `l` lights: one of several frusta only those in its
+    /// cell (`footprints`: each receiver's footprint on a face, found once for all that face's
+    /// frusta), a face of six spots those in its pyramid (`plan.cull_receivers`), other views
+    /// all of `receivers`.
+    fn view_receivers(
+        &self,
+        l: &Light,
+        view: &ShadowView,
+        receivers: &[u32],
+        footprints: &mut [Option<Vec<Option<Rect>>>; 6],
+    ) -> Vec<u32> {
+        let (on, p) = (self.on(), &self.options.plan);
+        match (view.kind, view.part) {
+            // One of several frusta lights only the receivers in its cell.
+            (ViewKind::Face(f), Some(part)) => {
+                let on_face = footprints[f].get_or_insert_with(|| {
+                    receivers
+                        .iter()
+                        .map(|&s| {
+                            let b = &self.scene.surfaces[s as usize].bounds;
+                            frusta::footprint(l.position, f, b)
+                        })
+                        .collect()
+                });
+                receivers
+                    .iter()
+                    .zip(on_face.iter())
+                    .filter(|(_, r)| r.is_some_and(|r| r.intersection(&part.cell).is_some()))
+                    .map(|(&s, _)| s)
+                    .collect()
+            }
+            (ViewKind::Face(f), None) if on && p.cull_receivers => {
+                let pyramid = cull::face_pyramid(l.position, f);
+                receivers
+                    .iter()
+                    .copied()
+                    .filter(|&s| pyramid.intersects_aabb(&self.scene.surfaces[s as usize].bounds))
+                    .collect()
+            }
+            _ => receivers.to_vec(),
+        }
+    }
+
+    /// Whether a light's views are six whole cube faces drawn as one merged map
+    /// (`plan.merge_faces`; not with clip planes at the maps' edges).
+    fn merges_faces(&self, views: &[ShadowView]) -> bool {
+        self.on()
+            && self.options.plan.merge_faces
+            && views.iter().all(|v| v.part.is_none())
+            && self.options.shadow_map.outside != Outside::ClipPlanes
+            && views.len() == 6
+            && views.iter().all(|v| matches!(v.kind, ViewKind::Face(_)))
     }
 
     /// Several frusta around the receivers in view of omni light `l` (index `index`;
