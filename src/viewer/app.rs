@@ -131,123 +131,10 @@ impl App {
         let (Some(r), Some(state)) = (self.running.as_mut(), self.state.as_mut()) else {
             return Ok(());
         };
-        let now = Instant::now();
-        let dt = (now - r.last).as_secs_f32();
-        r.last = now;
-        state.run_script().map_err(ViewerError::Script)?;
-        state.advance_camera(dt);
-        // A script's frames step the motion evenly, so that what it captures does not depend on
-        // how fast frames come.
-        let motion_dt = if state.scripted() {
-            super::state::MotionClock::STEP
-        } else {
-            f64::from(dt)
-        };
-        state.advance_motion(motion_dt, 0);
-        if state.needs_upload {
-            r.renderer.load_scene(&state.scene)?;
-            state.live_error.reset();
-            state.needs_upload = false;
-        }
-
-        // The frame, at the size the view had last time.
-        let mut options = state.options.clone();
-        options.width = r.view_size[0];
-        options.height = r.view_size[1];
-        let mut request = state.request();
-        let budget = f64::from(options.estimate.budget);
-        let live =
-            state.walkthrough.is_none() && state.live_error.wants_masks(&state.scene, budget);
-        request.masks |= live;
-        let start = Instant::now();
-        match r
-            .renderer
-            .render_at(&state.scene, &state.camera, &options, request)
-        {
-            Ok(frame) => {
-                // Masks are drawn after the timed frame: the rest of the call is their cost.
-                let masks_ms = start.elapsed().as_secs_f64() * 1e3 - frame.frame_ms;
-                let mut sampling_ms = 0.0;
-                if live && let Some(s) = state.live_error.sample(&state.scene, &frame, &options) {
-                    r.renderer.record_errors(&s.per_light, &options);
-                    sampling_ms = masks_ms.max(0.0) + state.live_error.trace_ms;
-                }
-                state.live_error.spend(frame.frame_ms, sampling_ms);
-                if request.masks && state.view == ViewMode::Error && state.error_job.is_none() {
-                    state.error_job = Some(ErrorJob::start(
-                        state.scene.clone(),
-                        &frame,
-                        state.frame_key(),
-                    ));
-                }
-                state.frame_done(frame.frame_ms, &frame.steps);
-                r.frame = Some(frame);
-            }
-            // A refused option (a map larger than the GL allows): say so, keep the last frame.
-            Err(e @ RenderError::Unsupported(_)) => state.status = e.to_string(),
-            Err(e) => return Err(e.into()),
-        }
-        if let Some(job) = &mut state.error_job
-            && let Some(result) = job.poll()
-        {
-            state.error_result = Some((job.key, result));
-        }
-        if state.error_job.as_ref().is_some_and(|j| j.finished()) {
-            state.error_job = None;
-        }
-
-        // Textures for the view.
-        let ctx = r.egui.egui_ctx.clone();
-        if let Some(f) = &r.frame {
-            let view = f.step_image.clone().unwrap_or_else(|| f.image.clone());
-            show(&ctx, &mut r.textures.view, "view", &view);
-        }
-        let light = state.selected_light;
-        let depth_images = r.renderer.shadow_map_views(light);
-        let aux: Option<(Rgba, String)> = match state.view {
-            ViewMode::Scene => None,
-            ViewMode::Depth => r
-                .renderer
-                .shadow_map_image(light, state.face.min(depth_images.saturating_sub(1)))
-                .map(|i| {
-                    (
-                        i,
-                        format!(
-                            "light {light}'s shadow map, view {} ({depth_images} views; \
-                             brighter: nearer)",
-                            state.face.min(depth_images.saturating_sub(1))
-                        ),
-                    )
-                })
-                .or_else(|| {
-                    state.status = format!("light {light} has no shadow map this frame");
-                    None
-                }),
-            ViewMode::Stencil => r.frame.as_ref().and_then(|f| f.stencil.as_ref()).map(|s| {
-                (
-                    debug::stencil_image(&s.values, s.width, s.height, s.wraps),
-                    format!(
-                        "light {}'s stencil counts (blue 1 … red 8+, magenta negative)",
-                        s.light
-                    ),
-                )
-            }),
-            ViewMode::Error => state.current_error().map(|e| {
-                (
-                    e.image.clone(),
-                    "red: false shadow, blue: false lit, yellow: receiver mismatch, greys: correct"
-                        .to_string(),
-                )
-            }),
-        };
-        match aux {
-            Some((img, caption)) => {
-                let mut slot = r.textures.aux.take().map(|(t, _)| t);
-                show(&ctx, &mut slot, "aux", &img);
-                r.textures.aux = slot.map(|t| (t, caption));
-            }
-            None => r.textures.aux = None,
-        }
+        r.advance(state)?;
+        r.render_frame(state)?;
+        poll_error_job(state);
+        let depth_images = r.update_textures(state);
 
         // The interface.
         let frame = r.frame.as_ref();
@@ -288,6 +175,148 @@ impl App {
             }
         }
         Ok(())
+    }
+}
+
+impl Running {
+    /// Moves time on: the script's next commands, the camera and the scene's motion, and the
+    /// scene uploaded again where it changed.
+    fn advance(&mut self, state: &mut ViewerState) -> Result<(), ViewerError> {
+        let now = Instant::now();
+        let dt = (now - self.last).as_secs_f32();
+        self.last = now;
+        state.run_script().map_err(ViewerError::Script)?;
+        state.advance_camera(dt);
+        // A script's frames step the motion evenly, so that what it captures does not depend on
+        // how fast frames come.
+        let motion_dt = if state.scripted() {
+            super::state::MotionClock::STEP
+        } else {
+            f64::from(dt)
+        };
+        state.advance_motion(motion_dt, 0);
+        if state.needs_upload {
+            self.renderer.load_scene(&state.scene)?;
+            state.live_error.reset();
+            state.needs_upload = false;
+        }
+        Ok(())
+    }
+
+    /// Renders the frame (with the masks live error sampling or the error view asks for) and
+    /// starts the error view's job on it.
+    fn render_frame(&mut self, state: &mut ViewerState) -> Result<(), ViewerError> {
+        // At the size the view had last time.
+        let mut options = state.options.clone();
+        options.width = self.view_size[0];
+        options.height = self.view_size[1];
+        let mut request = state.request();
+        let budget = f64::from(options.estimate.budget);
+        let live =
+            state.walkthrough.is_none() && state.live_error.wants_masks(&state.scene, budget);
+        request.masks |= live;
+        let start = Instant::now();
+        match self
+            .renderer
+            .render_at(&state.scene, &state.camera, &options, request)
+        {
+            Ok(frame) => {
+                // Masks are drawn after the timed frame: the rest of the call is their cost.
+                let masks_ms = start.elapsed().as_secs_f64() * 1e3 - frame.frame_ms;
+                let mut sampling_ms = 0.0;
+                if live && let Some(s) = state.live_error.sample(&state.scene, &frame, &options) {
+                    self.renderer.record_errors(&s.per_light, &options);
+                    sampling_ms = masks_ms.max(0.0) + state.live_error.trace_ms;
+                }
+                state.live_error.spend(frame.frame_ms, sampling_ms);
+                if request.masks && state.view == ViewMode::Error && state.error_job.is_none() {
+                    state.error_job = Some(ErrorJob::start(
+                        state.scene.clone(),
+                        &frame,
+                        state.frame_key(),
+                    ));
+                }
+                state.frame_done(frame.frame_ms, &frame.steps);
+                self.frame = Some(frame);
+            }
+            // A refused option (a map larger than the GL allows): say so, keep the last frame.
+            Err(e @ RenderError::Unsupported(_)) => state.status = e.to_string(),
+            Err(e) => return Err(e.into()),
+        }
+        Ok(())
+    }
+
+    /// The view's textures: the frame (or the step shown), and the auxiliary image the view
+    /// mode asks for. Returns the selected light's shadow-map view count.
+    fn update_textures(&mut self, state: &mut ViewerState) -> usize {
+        let ctx = self.egui.egui_ctx.clone();
+        if let Some(f) = &self.frame {
+            let view = f.step_image.clone().unwrap_or_else(|| f.image.clone());
+            show(&ctx, &mut self.textures.view, "view", &view);
+        }
+        let light = state.selected_light;
+        let depth_images = self.renderer.shadow_map_views(light);
+        let aux: Option<(Rgba, String)> = match state.view {
+            ViewMode::Scene => None,
+            ViewMode::Depth => self
+                .renderer
+                .shadow_map_image(light, state.face.min(depth_images.saturating_sub(1)))
+                .map(|i| {
+                    (
+                        i,
+                        format!(
+                            "light {light}'s shadow map, view {} ({depth_images} views; \
+                             brighter: nearer)",
+                            state.face.min(depth_images.saturating_sub(1))
+                        ),
+                    )
+                })
+                .or_else(|| {
+                    state.status = format!("light {light} has no shadow map this frame");
+                    None
+                }),
+            ViewMode::Stencil => self
+                .frame
+                .as_ref()
+                .and_then(|f| f.stencil.as_ref())
+                .map(|s| {
+                    (
+                        debug::stencil_image(&s.values, s.width, s.height, s.wraps),
+                        format!(
+                            "light {}'s stencil counts (blue 1 … red 8+, magenta negative)",
+                            s.light
+                        ),
+                    )
+                }),
+            ViewMode::Error => state.current_error().map(|e| {
+                (
+                    e.image.clone(),
+                    "red: false shadow, blue: false lit, yellow: receiver mismatch, greys: correct"
+                        .to_string(),
+                )
+            }),
+        };
+        match aux {
+            Some((img, caption)) => {
+                let mut slot = self.textures.aux.take().map(|(t, _)| t);
+                show(&ctx, &mut slot, "aux", &img);
+                self.textures.aux = slot.map(|t| (t, caption));
+            }
+            None => self.textures.aux = None,
+        }
+        depth_images
+    }
+}
+
+/// Takes the error job's result when it has one, and drops the job once it has finished.
+fn poll_error_job(state: &mut ViewerState) {
+    if let Some(job) = &mut state.error_job
+        && let Some(result) = job.poll()
+    {
+        state.error_result = Some((job.key, result));
+    }
+    if state.error_job.as_ref().is_some_and(|j| j.finished()) {
+        state.error_job = None;
     }
 }
 

@@ -1,0 +1,505 @@
+//! Each light's shadow-volume draws, decided on the CPU: which pieces are drawn, merged and
+//! culled, the rectangle and depth clip of each, which triangles are left out, how the vertex
+//! buffer is laid out and which draw calls the stencil pass makes. The GL layer uploads what
+//! [`LightVolumeDraws::upload`] holds and makes the draw calls; it decides nothing.
+//!
+//! Parts are rebuilt only when something they depend on changed (the light, a caster's
+//! transform, the build settings, the counting, the receivers their shadow reaches) unless
+//! caching is off; a light's draws are kept whole while nothing they are made from changed
+//! (`plan.reuse_volume_draws`).
+//!
+//! Vocabulary (used throughout `plan/` and `shadow/volume`):
+//! - a **caster group** holds one owner's casting triangles (the world, or one model), welded;
+//! - a **component** is a connected set of a group's triangles; a **chunk** is a spatial cut
+//!   of a component into at most `CHUNK_TRIANGLES` (the planner culls chunks, the paper's
+//!   frame extrudes whole components);
+//! - a **piece** is what one volume is extruded from: a component, a chunk, or chunks merged
+//!   (`plan.merge_pieces`);
+//! - a **part** is a piece with its counting: a piece split by `plan.split_counting` gives two
+//!   parts (its triangles near the near plane, depth-fail; the rest, depth-pass);
+//! - a **draw** is one draw call of the stencil pass over consecutive parts.
+
+mod parts;
+mod pieces;
+
+use parts::{check_bounds, draws_of};
+use pieces::{merge, plan_pieces, visible_receivers};
+
+use crate::geometry::Aabb;
+use crate::options::{ShadowVolumeOptions, VolumeCasters};
+use crate::plan::depth_bounds::{DepthRange, MAX_PLANES};
+use crate::plan::occlusion::DepthPyramid;
+use crate::plan::scissor::Scissor;
+use crate::plan::{CameraSetup, LightPlan};
+use crate::scene::Scene;
+use crate::shadow::volume::{self, CasterGroups, Counting, PieceRef, VolumeSettings};
+use glam::Mat4;
+use serde::Serialize;
+use std::borrow::Cow;
+use std::collections::HashMap;
+use std::hash::Hash;
+use std::time::Instant;
+use thiserror::Error;
+
+/// A light's draws would read past what is uploaded (a bug in the layout, caught before GL
+/// reads out of bounds: llvmpipe does not check).
+#[derive(Debug, Error, PartialEq)]
+pub enum VolumeDrawError {
+    #[error("light {light}: a volume draw ends at {end} past the {uploaded} uploaded")]
+    DrawPastBuffer {
+        light: usize,
+        end: i32,
+        uploaded: usize,
+    },
+    #[error("light {light}: a volume index points past the {vertices} vertices uploaded")]
+    IndexPastBuffer { light: usize, vertices: usize },
+}
+
+/// What one light's volumes cost, for stats and reports.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Serialize)]
+pub struct VolumeStats {
+    pub light: usize,
+    /// Side quads drawn.
+    pub quads: usize,
+    /// Cap triangles drawn (front and back caps of depth-fail parts).
+    pub cap_triangles: usize,
+    pub zfail_parts: usize,
+    pub zpass_parts: usize,
+    /// Caster triangles whose facing was tested when building.
+    pub triangles_tested: usize,
+    /// Facing triangles left out: their shadow reaches no receiver in view (planner).
+    pub triangles_culled: usize,
+    /// CPU time of the last build (silhouettes and extrusion).
+    pub build_ms: f64,
+    /// Whether this frame rebuilt any part (false: all reused from the cache).
+    pub rebuilt: bool,
+    /// Parts not drawn this frame: the receivers their shadow reaches are off the light's
+    /// screen rectangle (`plan.piece_scissor`).
+    pub parts_offscreen: usize,
+    /// Receivers no volume has to reach: the depth buffer hides their boxes
+    /// (`plan.occlusion`).
+    pub receivers_hidden: usize,
+    /// Parts ending just past their receivers rather than at infinity
+    /// (`plan.truncate_volumes`).
+    pub parts_truncated: usize,
+    /// Drawn depth-pass parts clipped at the farthest depth of their rectangle
+    /// (`plan.depth_clip`).
+    pub parts_depth_clipped: usize,
+    /// Drawn parts restricted by `EXT_depth_bounds_test` to the window-depth range of the
+    /// receivers their shadow reaches (`plan.depth_bounds_test`, where the GL has it).
+    pub parts_depth_bounded: usize,
+    /// The window-depth range of the receivers the drawn parts' shadows reach, all parts
+    /// together (what `EXT_depth_bounds_test` is given part by part); computed whenever the
+    /// receivers are known, so that its meaning can be checked where the test is missing.
+    /// None: a drawn part has none (receivers unknown, test off).
+    pub depth_range: Option<DepthRange>,
+    /// Depth-pass parts whose clip planes were fitted before, for this rectangle and this
+    /// depth buffer: by an earlier frame with the same depth (`plan.reuse_depth_fits`), or
+    /// for another part or light of this frame.
+    pub depth_fits_reused: usize,
+    /// Triangles of those parts left out of the draw because one clip plane rejects all
+    /// three corners (`plan.cull_clipped`); a part left with none is not drawn. `quads` and
+    /// `cap_triangles` count the drawn parts' triangles before this.
+    pub triangles_clipped: usize,
+    /// Parts with triangles to draw: not off screen, not left empty by the build or by
+    /// `plan.cull_clipped`.
+    pub parts_drawn: usize,
+    /// Mean share of the screen a drawn part's stencil draw is scissored to (1 without
+    /// `plan.piece_scissor`).
+    pub part_scissor_fraction: f64,
+    /// Planned chunks drawn inside a merged piece (`plan.merge_pieces`), and the merged pieces
+    /// they make up.
+    pub chunks_merged: usize,
+    pub merged_parts: usize,
+    /// Parts built this frame, and parts reused from earlier frames.
+    pub parts_built: usize,
+    pub parts_reused: usize,
+    /// The last frame's draws, drawn as they were: nothing they are made from changed
+    /// (`plan.reuse_volume_draws`); the other counts are theirs.
+    pub draws_reused: bool,
+}
+
+/// Which triangles of a caster group one drawn piece holds.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum PieceId {
+    /// A whole connected component (the paper's frame, without `plan.cull_casters`).
+    Component(usize),
+    /// The chunks `first..end`: one chunk, or neighbours merged (`plan.merge_pieces`).
+    Chunks(usize, usize),
+    /// Part of a chunk or component split by counting (`plan.split_counting`): its triangles
+    /// near the near plane, or the rest.
+    Split { of: PieceRef, near_plane: bool },
+}
+
+/// One part's vertex ranges in the light's buffer.
+#[derive(Debug, Clone, Copy)]
+pub struct PartRange {
+    pub group: usize,
+    pub piece: PieceId,
+    pub counting: Counting,
+    pub model: Mat4,
+    pub first: i32,
+    pub sides: i32,
+    pub caps: i32,
+    /// Where its stencil draw may change counts (None: the light's rectangle).
+    pub scissor: Option<Scissor>,
+    /// A clip-space plane its stencil draw is clipped to (`gl_ClipDistance`; zero: none).
+    pub depth_clip: [[f32; 4]; MAX_PLANES],
+    /// The window-depth range the depth already stored at a pixel must lie in for its draw
+    /// to change the pixel's count (`EXT_depth_bounds_test`; None: no test).
+    pub depth_bounds: Option<DepthRange>,
+    /// The triangles the clip planes leave anything of, as (first, count) in the light's
+    /// index buffer (`plan.cull_clipped`); None: all of them, straight from the vertices.
+    pub elements: Option<(i32, i32)>,
+}
+
+impl PartRange {
+    /// False for a part whose rectangle or depth range is empty (its counts can change no
+    /// receiver in view) or whose every triangle the clip planes reject.
+    pub fn drawn(&self) -> bool {
+        self.scissor.is_none_or(|s| s.area() > 0)
+            && self.elements.is_none_or(|(_, n)| n > 0)
+            && self.depth_bounds.is_none_or(|[lo, hi]| lo <= hi)
+    }
+}
+
+/// One draw call of the stencil pass: consecutive parts with the same counting, transform and
+/// rectangle, whose vertices follow one another in the buffer.
+#[derive(Debug, Clone, Copy)]
+pub struct VolumeDraw {
+    pub counting: Counting,
+    pub model: Mat4,
+    /// Sides, then (depth-fail) caps, of every part in it: vertices, or with `indexed` the
+    /// light's index buffer's entries.
+    pub first: i32,
+    pub count: i32,
+    pub indexed: bool,
+    pub scissor: Option<Scissor>,
+    pub depth_clip: [[f32; 4]; MAX_PLANES],
+    pub depth_bounds: Option<DepthRange>,
+}
+
+/// Everything a light's volume draws are made from: the light's plan, the camera, the depth
+/// read back (by its generation), the volume options and the planner's choices, the light and
+/// the casters' transforms and poses. While all of it is the same, the draws are what they were.
+#[derive(PartialEq)]
+struct DrawInputs {
+    plan: LightPlan,
+    depth: u64,
+    camera: CameraSetup,
+    options: ShadowVolumeOptions,
+    choices: ([bool; 8], usize),
+    light: (glam::Vec3, f32),
+    transforms: Vec<(Mat4, u64)>,
+}
+
+impl DrawInputs {
+    fn of(
+        scene: &Scene,
+        groups: &CasterGroups,
+        lp: &LightPlan,
+        o: &ShadowVolumeOptions,
+        p: &PieceChoices,
+    ) -> Self {
+        let light = &scene.lights[lp.light];
+        DrawInputs {
+            plan: lp.clone(),
+            depth: p.depth_generation,
+            camera: *p.camera,
+            options: o.clone(),
+            choices: (
+                [
+                    p.depth.is_some(),
+                    p.occlusion,
+                    p.scissor,
+                    p.truncate,
+                    p.merge,
+                    p.cull_clipped,
+                    p.reuse_fits,
+                    p.depth_bounds,
+                ],
+                p.depth_clip,
+            ),
+            light: (light.position, light.radius),
+            transforms: lp
+                .volumes
+                .iter()
+                .map(|v| {
+                    let g = &groups.groups[v.group];
+                    (volume::group_transform(scene, g.owner), g.pose)
+                })
+                .collect(),
+        }
+    }
+}
+
+struct CachedPart {
+    key: u64,
+    mesh: volume::VolumeMesh,
+    /// The boxes of the mesh's blocks of triangles, for `plan.cull_clipped`.
+    blocks: Vec<Option<Aabb>>,
+}
+
+/// The planner's per-piece decisions that need the receivers a piece's shadow reaches (known
+/// only with `plan.cull_casters`).
+#[derive(Debug, Clone, Copy)]
+pub struct PieceChoices<'a> {
+    pub camera: &'a CameraSetup,
+    /// `plan.piece_scissor`: each part gets the screen rectangle of those receivers.
+    pub scissor: bool,
+    /// `plan.truncate_volumes`: each part ends just past them.
+    pub truncate: bool,
+    /// The frame's depth after the base pass, when `occlusion` or `depth_clip` reads it.
+    pub depth: Option<&'a DepthPyramid>,
+    /// `plan.occlusion`: receivers the depth hides are left out.
+    pub occlusion: bool,
+    /// `plan.depth_clip`: each depth-pass part is clipped behind the depth buffer within its
+    /// rectangle by up to this many planes (`plan.depth_clip_planes`; 0: not clipped).
+    pub depth_clip: usize,
+    /// `plan.merge_pieces`: neighbouring chunks kept alike are drawn as one piece.
+    pub merge: bool,
+    /// `plan.depth_bounds_test` (where the GL has `EXT_depth_bounds_test`): each part's draw
+    /// is restricted to pixels whose stored depth lies in the window-depth range of the
+    /// receivers its shadow reaches. It replaces `depth_clip`, the emulation: each part gets
+    /// one or the other.
+    pub depth_bounds: bool,
+    /// `plan.cull_clipped`: a depth-clipped part draws only the triangles its clip planes do
+    /// not wholly reject.
+    pub cull_clipped: bool,
+    /// `plan.reuse_depth_fits`: fits are kept for the next frame (used while its depth is the
+    /// same, see [`VolumePlanner::begin_frame`]).
+    pub reuse_fits: bool,
+    /// `plan.reuse_volume_draws`: a light's draws are kept, and drawn again while nothing they
+    /// are made from changed.
+    pub reuse_draws: bool,
+    /// Which depth `depth` is: a count the renderer advances whenever the depth it reads back
+    /// differs from the one it read before, so that draws made from an earlier depth are
+    /// never taken for this one's.
+    pub depth_generation: u64,
+}
+
+/// A fit's inputs besides the depth: the rectangle and the planes allowed.
+type FitKey = ([i32; 4], usize);
+
+/// How the volumes of `o` are built (the CPU benchmarks build them so too).
+pub fn settings(o: &ShadowVolumeOptions) -> VolumeSettings {
+    VolumeSettings {
+        rule: o.edge_rule,
+        extrusion: o.extrusion,
+        finite_distance: o.finite_distance,
+        facing_epsilon: o.facing_epsilon,
+        two_sided: o.casters == VolumeCasters::Both,
+    }
+}
+
+/// One piece a light's stencil pass draws: a planned part, or planned chunks merged.
+struct Piece {
+    group: usize,
+    id: PieceId,
+    counting: Counting,
+    /// The group's transform, and the light and its range in the group's space.
+    model: Mat4,
+    light_local: glam::Vec3,
+    local_radius: f32,
+    /// The receiver boxes its shadow can reach: indices into the group's `local_boxes`, in
+    /// order.
+    near: Vec<u32>,
+    /// Where its draw may change counts (`plan.piece_scissor`; None: the light's rectangle).
+    rect: Option<Scissor>,
+    /// The window-depth range of the receiver points its counts can change
+    /// (`plan.depth_bounds_test`; None: not tested).
+    depth_range: Option<DepthRange>,
+    /// A split part's triangles (None: those `id` names), and a hash of them for its key.
+    subset: Option<volume::Component>,
+    subset_key: u64,
+}
+
+impl Piece {
+    /// The triangles the piece holds: a split part carries them, the others are named by
+    /// their id.
+    fn triangles<'a>(&'a self, group: &'a volume::CasterGroup) -> Cow<'a, volume::Component> {
+        match (&self.subset, self.id) {
+            (Some(subset), _) => Cow::Borrowed(subset),
+            (None, PieceId::Chunks(first, end)) if end == first + 1 => {
+                Cow::Borrowed(&group.chunks[first])
+            }
+            (None, PieceId::Chunks(first, end)) => Cow::Owned(group.chunk_span(first, end)),
+            (None, PieceId::Component(i)) => Cow::Borrowed(&group.components[i]),
+            (None, PieceId::Split { of, .. }) => Cow::Borrowed(group.piece(of)),
+        }
+    }
+}
+
+/// One light's volume draws as last prepared, and what the GL layer must upload for them.
+#[derive(Default)]
+pub struct LightVolumeDraws {
+    pub light: usize,
+    pub parts: Vec<PartRange>,
+    /// The stencil pass's draw calls over `parts`.
+    pub draws: Vec<VolumeDraw>,
+    pub stats: VolumeStats,
+    /// What this frame must upload before drawing.
+    pub upload: VolumeUpload,
+    /// Each part's last geometry, by group and piece, with what it was built from.
+    meshes: HashMap<(usize, PieceId), CachedPart>,
+    /// What the buffer holds: a hash of the written parts' keys in order and their length.
+    layout: u64,
+    /// What the draws were made from (`plan.reuse_volume_draws`; None: not kept).
+    inputs: Option<DrawInputs>,
+}
+
+/// The buffers a light's draws need this frame (None: what was uploaded before still holds).
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct VolumeUpload {
+    /// Every part's vertices in buffer order (`vec4`, w = 0 at infinity).
+    pub vertices: Option<Vec<[f32; 4]>>,
+    /// The index list of the parts drawn through one (`plan.cull_clipped`).
+    pub indices: Option<Vec<u32>>,
+}
+
+/// Every light's volume draws, with the caches they are made from: the planner owns them.
+#[derive(Default)]
+pub struct VolumePlanner {
+    lights: HashMap<usize, LightVolumeDraws>,
+    /// The depth clip planes fitted since the depth buffer last changed, by rectangle and
+    /// plane count (`plan.reuse_depth_fits`): a fit reads nothing else.
+    fits: HashMap<FitKey, [[f32; 4]; MAX_PLANES]>,
+}
+
+/// The planned pieces of one light, with the receivers' boxes in each caster group's space and
+/// a hash of each box.
+struct PlannedPieces {
+    pieces: Vec<Piece>,
+    local_boxes: HashMap<usize, (Vec<Aabb>, Vec<u64>)>,
+}
+
+/// The buffer layout of one light's parts, and the index list of those drawn through one.
+struct Layout {
+    parts: Vec<PartRange>,
+    indices: Vec<u32>,
+    /// Vertices of every part, in order.
+    vertex_count: usize,
+    /// A hash of the parts' keys in order and their length.
+    hash: u64,
+}
+
+impl VolumePlanner {
+    /// Volume parts kept for later frames, all lights together, and depth fits kept.
+    pub fn held(&self) -> (usize, usize) {
+        let parts = self.lights.values().map(|l| l.meshes.len()).sum();
+        (parts, self.fits.len())
+    }
+
+    /// Once a frame, before [`VolumePlanner::prepare`]: `same_depth` says the depth buffer
+    /// (at the frame's size) is the last frame's, so the fits made for it still hold.
+    pub fn begin_frame(&mut self, same_depth: bool) {
+        if !same_depth {
+            self.fits.clear();
+        }
+    }
+
+    /// Forgets every light's draws and fits (a new scene).
+    pub fn forget(&mut self) {
+        self.lights.clear();
+        self.fits.clear();
+    }
+
+    /// Forgets the light's draws: what the GL layer holds for it may not match them (an
+    /// upload failed), so the next frame builds and uploads them afresh.
+    pub fn forget_light(&mut self, light: usize) {
+        self.lights.remove(&light);
+    }
+
+    /// The light's volume draws as last prepared.
+    pub fn get(&self, light: usize) -> Option<&LightVolumeDraws> {
+        self.lights.get(&light)
+    }
+
+    /// The light's volume draws: parts whose key changed are rebuilt (all of them when
+    /// `caching` is off), the buffer laid out again when its contents changed.
+    pub fn prepare(
+        &mut self,
+        scene: &Scene,
+        groups: &CasterGroups,
+        lp: &LightPlan,
+        o: &ShadowVolumeOptions,
+        choices: PieceChoices,
+    ) -> Result<&LightVolumeDraws, VolumeDrawError> {
+        let inputs = choices
+            .reuse_draws
+            .then(|| DrawInputs::of(scene, groups, lp, o, &choices));
+        let lv = self.lights.entry(lp.light).or_default();
+        lv.light = lp.light;
+        if inputs.is_some() && lv.inputs == inputs {
+            lv.keep_last_draws();
+            return Ok(&self.lights[&lp.light]);
+        }
+        match self.prepare_again(scene, groups, lp, o, choices, inputs) {
+            Ok(()) => Ok(&self.lights[&lp.light]),
+            Err(e) => {
+                // Nothing of this frame's layout is kept: the next frame lays out afresh.
+                self.lights.remove(&lp.light);
+                Err(e)
+            }
+        }
+    }
+
+    /// [`VolumePlanner::prepare`] when the light's draws cannot be kept as they were.
+    fn prepare_again(
+        &mut self,
+        scene: &Scene,
+        groups: &CasterGroups,
+        lp: &LightPlan,
+        o: &ShadowVolumeOptions,
+        choices: PieceChoices,
+        inputs: Option<DrawInputs>,
+    ) -> Result<(), VolumeDrawError> {
+        let lv = self.lights.entry(lp.light).or_default();
+        let start = Instant::now();
+        let camera = choices.camera;
+        let receivers = visible_receivers(lp, &choices);
+        let mut stats = VolumeStats {
+            light: lp.light,
+            receivers_hidden: lp.volume_receivers.len() - receivers.len(),
+            ..VolumeStats::default()
+        };
+        let planned = plan_pieces(scene, groups, lp, &receivers, &choices);
+        let drawn_pieces = if choices.merge {
+            let whole = lp.scissor.unwrap_or_else(|| Scissor::full(camera));
+            merge(planned.pieces, groups, whole, &mut stats)
+        } else {
+            planned.pieces
+        };
+        let light_world = scene.lights[lp.light].position;
+        let culling = !lp.volume_receivers.is_empty();
+        let keys = lv.build_parts(
+            groups,
+            &drawn_pieces,
+            &planned.local_boxes,
+            (light_world, o, culling, choices.truncate),
+            &mut stats,
+        );
+        let layout = lv.lay_out(
+            &drawn_pieces,
+            &keys,
+            lp,
+            &choices,
+            &mut self.fits,
+            &mut stats,
+        );
+        stats.rebuilt = stats.parts_built > 0;
+        let draws = draws_of(&layout.parts);
+        check_bounds(lp.light, &draws, &layout.indices, layout.vertex_count)?;
+        lv.upload = VolumeUpload {
+            vertices: (layout.hash != lv.layout || stats.rebuilt).then(|| lv.vertices(&layout)),
+            indices: (!layout.indices.is_empty()).then_some(layout.indices),
+        };
+        lv.layout = layout.hash;
+        stats.build_ms = start.elapsed().as_secs_f64() * 1e3;
+        lv.draws = draws;
+        lv.parts = layout.parts;
+        lv.inputs = inputs;
+        lv.stats = stats;
+        Ok(())
+    }
+}
