@@ -15,6 +15,7 @@ pub mod plan;
 pub mod presets;
 pub mod q3;
 pub mod report;
+pub mod run;
 pub mod scene;
 pub mod scene_file;
 pub mod shadow;

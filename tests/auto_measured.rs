@@ -7,10 +7,10 @@ mod common;
 
 use common::{gl_on, load_asset, load_scene_file, options_with};
 use shadowlab::frame::Frame;
-use shadowlab::gl::{FrameRequest, Renderer};
 use shadowlab::options::{BackendChoice, Candidate, MapBuffer, Options, Technique};
 use shadowlab::plan::auto::CostSource;
 use shadowlab::report::estimate::{learn_auto, sampled_frame};
+use shadowlab::run::{FrameRequest, Renderer};
 use shadowlab::scene::{Scene, path};
 use shadowlab::truth::{Counts, ExactMasks, Reference};
 use std::collections::{BTreeMap, HashMap};

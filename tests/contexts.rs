@@ -35,7 +35,7 @@ fn measured_on(backend: BackendChoice, api: GlApi) -> Vec<common::Measured> {
     let mut m = Measurer::on(backend, builtin::default_scene(), &first);
     assert_eq!(m.context().api, api);
     let profile = if api == GlApi::Es3 { "es" } else { "core" };
-    assert_eq!(m.renderer().caps.profile, profile);
+    assert_eq!(m.renderer().caps().profile, profile);
     ES_ERROR_BOUND
         .iter()
         .map(|(t, _)| m.measure(&options_with(&[t])))
@@ -90,7 +90,7 @@ fn es3_draws_into_the_map_instead_of_copying_depth_and_reduces_depth_instead_of_
         builtin::default_scene(),
         &options_with(&["technique=shadow_map"]),
     );
-    assert!(!es.renderer().caps.has("depth_copy"));
+    assert!(!es.renderer().caps().has("depth_copy"));
     let copy = es.measure(&options_with(&[
         "technique=shadow_map",
         "shadow_map.depth_source=copy",
@@ -111,7 +111,7 @@ fn es3_draws_into_the_map_instead_of_copying_depth_and_reduces_depth_instead_of_
         assert_eq!(copy.mask(l).values, fbo.mask(l).values, "light {l}");
     }
     // The planner's whole-depth read (ES reads no depth) becomes the shader-reduced one.
-    assert!(!es.renderer().caps.has("depth_read"));
+    assert!(!es.renderer().caps().has("depth_read"));
     let sv = "technique=shadow_volume";
     let whole = es.measure(&options_with(&[sv, "plan.reduce_depth=false"]));
     let reduced = es.measure(&options_with(&[sv, "plan.reduce_depth=true"]));

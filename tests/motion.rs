@@ -359,7 +359,7 @@ fn ten_thousand_frames_in_motion_stay_flat() {
     }
     let before = Footprint::take(&gl);
     const FRAMES: usize = 10_000;
-    let mut held_max = shadowlab::gl::Held::default();
+    let mut held_max = shadowlab::run::Held::default();
     for i in 200..200 + FRAMES {
         frame(&mut m, i);
         let h = m.renderer().held();

@@ -12,7 +12,6 @@ use common::{
 use glam::{Mat4, Vec3};
 use shadowlab::frame::Frame;
 use shadowlab::geometry::Frustum;
-use shadowlab::gl::{FrameRequest, Renderer};
 use shadowlab::images::MaskValue;
 use shadowlab::options::{BackendChoice, Options, Technique};
 use shadowlab::plan::Plan;
@@ -22,6 +21,7 @@ use shadowlab::plan::{
     CameraSetup,
     auto::{estimated_error, learning_frames},
 };
+use shadowlab::run::{FrameRequest, Renderer};
 use shadowlab::scene::Camera;
 use shadowlab::scene::Scene;
 use shadowlab::scene::path::PathKey;

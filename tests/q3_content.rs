@@ -7,11 +7,12 @@ mod common;
 use common::{
     load_asset, load_scene_file, openarena_data, options_with, render, stdout_of, test_options,
 };
-use shadowlab::gl::{Profile, Renderer, create_context};
+use shadowlab::gl::{Profile, create_context};
 use shadowlab::options::BackendChoice;
 use shadowlab::q3::builder::SceneBuilder;
 use shadowlab::q3::pk3::Vfs;
 use shadowlab::q3::world;
+use shadowlab::run::Renderer;
 use shadowlab::scene::{Camera, SurfaceOwner};
 use shadowlab::scene_file::load_shader_library;
 use std::process::Command;

@@ -113,7 +113,7 @@ pub fn run(common: &CommonArgs, args: &Args) -> Result<()> {
         } else {
             " with the scene moving"
         },
-        renderer.caps.renderer
+        renderer.caps().renderer
     );
     let settings = BenchSettings {
         warmup: args.warmup,

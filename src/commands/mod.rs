@@ -15,9 +15,10 @@ pub mod view;
 
 use anyhow::{Context, Result};
 use shadowlab::gl::legacy::Legacy;
-use shadowlab::gl::{GlContext, Profile, Renderer, create_context};
+use shadowlab::gl::{GlContext, Profile, create_context};
 use shadowlab::options::{BackendChoice, OptionValue, Options, Pipeline};
 use shadowlab::presets::Preset;
+use shadowlab::run::Renderer;
 use shadowlab::scene::{Scene, builtin};
 use shadowlab::scene_file::LoadReport;
 pub use shadowlab::scene_file::load::Loaded;

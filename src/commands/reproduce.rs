@@ -61,7 +61,7 @@ pub fn run(common: &CommonArgs, args: &Args) -> Result<()> {
             "full run"
         },
         args.out.display(),
-        renderer.caps.renderer
+        renderer.caps().renderer
     );
     let report = reproduce::run(&mut renderer, &settings, &args.out)?;
     for s in &report.summary {

@@ -148,7 +148,7 @@ pub fn run(common: &CommonArgs, args: &Args) -> Result<()> {
     eprintln!(
         "tune: {} on {}, {} configurations drawn, halving over {:?} frames to {}, {}",
         scene.name,
-        renderer.caps.renderer,
+        renderer.caps().renderer,
         settings.candidates,
         settings.rung_frames,
         settings.finalists,

@@ -16,6 +16,7 @@ pub mod pass;
 pub mod planner;
 pub mod profile;
 pub mod scissor;
+pub mod settings;
 pub mod volume_draws;
 
 use crate::geometry::{Aabb, projection};

@@ -9,7 +9,6 @@
 //! (`truth::sampled`, `estimate.samples` pixels per light), in an untimed pass after the timing.
 
 use crate::frame::{CacheStats, Frame, Syncs};
-use crate::gl::{FrameRequest, RenderError, Renderer};
 use crate::images::Mask;
 use crate::options::{OptionError, Options, Technique};
 use crate::plan::PlanStats;
@@ -17,6 +16,7 @@ use crate::plan::fallback::Fallback;
 use crate::plan::volume_draws::VolumeStats;
 use crate::presets::{Difference, Preset};
 use crate::report::estimate::{gbuffer_of, render_sampled};
+use crate::run::{FrameRequest, RenderError, Renderer};
 use crate::scene::Scene;
 use crate::scene::path::PathKey;
 use crate::truth::sampled::{FrameSample, Interval};

@@ -2,9 +2,9 @@
 //! maps and shadow volumes with the planner on and off, measured against the exact reference.
 //! One [`MapCheck`] per map; a map that cannot be loaded or rendered says why instead.
 
-use crate::gl::{FrameRequest, Renderer};
 use crate::images::{Mask, MaskValue};
 use crate::options::{Options, Technique};
+use crate::run::{FrameRequest, Renderer};
 use crate::scene::Scene;
 use crate::scene_file::{
     CameraSection, LightSource, LightsSection, LoadReport, MapSection, SceneFile,

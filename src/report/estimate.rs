@@ -2,10 +2,10 @@
 //! reference (`truth::sampled`), and the errors given to `technique = auto`.
 
 use crate::frame::Frame;
-use crate::gl::{FrameRequest, RenderError, Renderer};
 use crate::images::GBuffer;
 use crate::options::{Options, Technique};
 use crate::plan::auto::learning_frames;
+use crate::run::{FrameRequest, RenderError, Renderer};
 use crate::scene::{Camera, Scene};
 use crate::truth::Reference;
 use crate::truth::sampled::{FrameSample, sample_frame};

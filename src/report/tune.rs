@@ -7,8 +7,8 @@
 //! each step of error, what it costs in time.
 
 use super::bench::{Bench, BenchConfig, BenchRow, BenchSettings};
-use crate::gl::{RenderError, Renderer};
 use crate::options::{OptionError, Options, Technique};
+use crate::run::{RenderError, Renderer};
 use crate::scene::Scene;
 use crate::scene::path::PathKey;
 use indicatif::ProgressBar;

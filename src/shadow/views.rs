@@ -126,6 +126,17 @@ impl ShadowView {
         self.projection * self.view
     }
 
+    /// What drawing this view's map draws: a cube's six faces seen from the light at `eye`
+    /// (by face), or the one view.
+    pub fn face_view_projs(&self, eye: Vec3) -> Vec<(Option<usize>, Mat4)> {
+        match self.kind {
+            ViewKind::Cube => (0..6)
+                .map(|f| (Some(f), self.projection * cube_face_view(eye, f)))
+                .collect(),
+            _ => vec![(None, self.view_proj())],
+        }
+    }
+
     /// The side of this view's map: its own under multiple frusta, `shadow_map.size` else.
     pub fn map_size(&self, size: u32) -> u32 {
         self.part.map_or(size, |p| p.size)

@@ -2,8 +2,9 @@
 #![allow(dead_code)]
 
 use shadowlab::frame::Frame;
-use shadowlab::gl::{GlContext, Profile, Renderer, create_context};
+use shadowlab::gl::{GlContext, Profile, create_context};
 use shadowlab::options::{BackendChoice, Options};
+use shadowlab::run::Renderer;
 use shadowlab::scene::Scene;
 
 /// The standard output of a finished command, which must have succeeded (its error output is
@@ -254,7 +255,7 @@ pub fn floor_quad(cx: f32, cy: f32, half: f32, z: f32) -> shadowlab::scene::shap
 pub struct Measurer {
     pub scene: Scene,
     // Dropped before the context its GL objects live in.
-    renderer: shadowlab::gl::Renderer,
+    renderer: shadowlab::run::Renderer,
     ctx: shadowlab::gl::GlContext,
     exact: shadowlab::truth::ExactMasks,
 }
@@ -305,7 +306,7 @@ impl Measurer {
         &self.ctx
     }
 
-    pub fn renderer(&mut self) -> &mut shadowlab::gl::Renderer {
+    pub fn renderer(&mut self) -> &mut shadowlab::run::Renderer {
         let _ = &self.ctx;
         &mut self.renderer
     }

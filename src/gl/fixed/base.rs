@@ -33,7 +33,7 @@ pub fn draw(ctx: &PassContext, ff: &FixedFunction) {
     let gl = ctx.gl;
     let l = &ff.legacy;
     DrawState::OPAQUE.apply(gl);
-    let scale = (1u32 << ctx.options.q3.overbright_bits) as f32;
+    let scale = (1u32 << ctx.settings.overbright_bits) as f32;
     // SAFETY: fixed-function state on the bound framebuffer.
     unsafe {
         gl.use_program(None);
@@ -50,7 +50,7 @@ pub fn draw(ctx: &PassContext, ff: &FixedFunction) {
     ff.clip_planes(gl, None);
     ff.bind_scene(ctx);
     let items = ctx.gpu.draw_list(ctx.scene, |s| ctx.plan.visible[s]);
-    let lighting = &ctx.options.lighting;
+    let lighting = &ctx.settings.lighting;
     let view = ctx.plan.camera.view;
     ff.draw_items(
         ctx,

@@ -45,7 +45,7 @@ fn alpha_func(f: AlphaTestFunc) -> u32 {
 /// SAFETY (caller): the legacy context is current.
 unsafe fn set_light(ctx: &PassContext, l: &Legacy, lp: &LightPlan) {
     let light = &ctx.scene.lights[lp.light];
-    let color = light.color * ctx.options.lighting.intensity;
+    let color = light.color * ctx.settings.lighting.intensity;
     let p = light.position;
     let black = [0.0f32, 0.0, 0.0, 1.0];
     // SAFETY: see the caller's contract; every array holds what its parameter reads.
@@ -108,7 +108,7 @@ unsafe fn set_light(ctx: &PassContext, l: &Legacy, lp: &LightPlan) {
 unsafe fn bind_map(ctx: &PassContext, ff: &FixedFunction, s: &ShadowBinding, scale_light: bool) {
     let gl = ctx.gl;
     let l = &ff.legacy;
-    let o = &ctx.options.shadow_map;
+    let o = &ctx.settings.shadow_map;
     // World-space planes: T = B · P_light · V_light, loaded under the camera's view.
     let planes = s.view.texgen(&Mat4::IDENTITY);
     // SAFETY: see the caller's contract; our own depth texture.
@@ -182,7 +182,7 @@ fn unbind_map(gl: &glow::Context, s: &ShadowBinding) {
 /// The shadow compare's alpha test: the options' function under ALPHA; under INTENSITY "lit
 /// at one half or more", which is how the shader path's mask reads it.
 fn compare_alpha_test(ctx: &PassContext, l: &Legacy, for_mask: bool) {
-    let o = &ctx.options.shadow_map;
+    let o = &ctx.settings.shadow_map;
     // SAFETY: fixed-function state.
     unsafe {
         match o.result {
@@ -212,14 +212,14 @@ const CLIPPED_UNITS: f32 = 4.0;
 fn clips(ctx: &PassContext, maps: &[&ShadowBinding]) -> bool {
     maps.iter().any(|s| {
         matches!(s.view.kind, ViewKind::Face(_))
-            || ctx.options.shadow_map.outside == Outside::ClipPlanes
+            || ctx.settings.shadow_map.outside == Outside::ClipPlanes
     })
 }
 
 /// The lit pass's polygon offset (the paper's, pulling the lit world toward the camera), and
 /// the few units that keep clipped triangles from losing against their own depth.
 fn lit_offset(ctx: &PassContext, lp: &LightPlan, maps: &[&ShadowBinding]) -> bool {
-    let o = &ctx.options.shadow_map;
+    let o = &ctx.settings.shadow_map;
     let paper = offset_for(o, lp.order).filter(|_| {
         !maps.is_empty() && matches!(o.offset_pass, OffsetPass::Lit | OffsetPass::Both)
     });
@@ -292,7 +292,7 @@ pub fn draw(
         ..DrawState::OVER_DEPTH
     }
     .apply(gl);
-    lit_stencil(gl, shadow, ctx.options.lighting.light_once);
+    lit_stencil(gl, shadow, ctx.settings.lighting.light_once);
     // SAFETY: fixed-function state of the current compatibility context.
     unsafe {
         gl.use_program(None);

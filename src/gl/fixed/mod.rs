@@ -2,7 +2,7 @@
 //! on a compatibility-profile context: no program is bound while they draw.
 //!
 //! They execute the same plan as the shader passes (`gl::passes`) and leave the same buffers
-//! behind: the depth of the unlit world, each light's stencil counts or shadow maps. Options
+//! behind: the depth of the unlit world, each light's stencil counts or shadow maps. Choices
 //! the legacy calls cannot express were replaced before planning (`plan::fixed_function`).
 //! Matrices are loaded as the paper loads them: the camera's projection, the camera's view
 //! times the owner's model matrix as the modelview, so eye-linear texgen planes and clip

@@ -15,7 +15,7 @@ use glow::HasContext;
 pub fn render(ctx: &PassContext, ff: &FixedFunction, view: &MapView, target: &DepthTarget) {
     begin(ctx, view, target);
     let gl = ctx.gl;
-    let o = &ctx.options.shadow_map;
+    let o = &ctx.settings.shadow_map;
     let alpha_casters = o.alpha_casters == AlphaCasters::Test;
     // SAFETY: fixed-function state; the light's view and projection as one projection.
     unsafe {

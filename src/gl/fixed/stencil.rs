@@ -44,7 +44,7 @@ pub fn draw(
     light_scissor: Option<Scissor>,
 ) {
     let gl = ctx.gl;
-    let o = &ctx.options.shadow_volume;
+    let o = &ctx.settings.shadow_volume;
     stencil::begin(gl, o, true);
     // SAFETY: fixed-function state of the current compatibility context.
     unsafe {

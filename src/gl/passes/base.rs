@@ -25,10 +25,10 @@ pub fn draw(ctx: &PassContext, program: &Program) {
     program.set_f32(
         gl,
         "u_lightmap_scale",
-        (1u32 << ctx.options.q3.overbright_bits) as f32,
+        (1u32 << ctx.settings.overbright_bits) as f32,
     );
     let items = ctx.gpu.draw_list(ctx.scene, |s| ctx.plan.visible[s]);
-    let lighting = &ctx.options.lighting;
+    let lighting = &ctx.settings.lighting;
     draw_items(ctx, program, &items, |item| {
         let level = match item.owner {
             SurfaceOwner::World => lighting.ambient,

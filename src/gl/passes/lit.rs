@@ -5,7 +5,7 @@ use super::shadow_map::offset_for;
 use super::state::DrawState;
 use super::{PassContext, draw_items};
 use crate::gl::program::{Program, has_clip_distances};
-use crate::options::{OffsetPass, Outside, TexgenSpace};
+use crate::options::{OffsetPass, Outside, ShadowMapOptions, TexgenSpace};
 use crate::plan::LightPlan;
 use crate::scene::{LightKind, light::SPOT_INNER_FRACTION};
 use crate::shadow::views::{ShadowView, ViewKind};
@@ -50,7 +50,7 @@ pub fn bind_light(ctx: &PassContext, program: &Program, lp: &LightPlan, shadow: 
         LitShadow::Hybrid(maps) => {
             bind_maps(ctx, program, lp, maps);
             program.set_i32(ctx.gl, "u_hybrid_stage", 1);
-            program.set_i32(ctx.gl, "u_hybrid_radius", ctx.options.hybrid.radius as i32);
+            program.set_i32(ctx.gl, "u_hybrid_radius", ctx.settings.hybrid.radius as i32);
         }
         _ => bind_maps(ctx, program, lp, shadow),
     }
@@ -58,15 +58,39 @@ pub fn bind_light(ctx: &PassContext, program: &Program, lp: &LightPlan, shadow: 
 
 fn bind_maps(ctx: &PassContext, program: &Program, lp: &LightPlan, shadow: &LitShadow) {
     let gl = ctx.gl;
-    let light = &ctx.scene.lights[lp.light];
     program.bind(gl);
+    set_light(ctx, program, lp);
+    let o = &ctx.settings.shadow_map;
+    set_offset_and_clips(gl, o, lp, shadow);
+    let space = TexgenFrame::of(ctx, lp);
+    let table = match shadow {
+        LitShadow::Map(s) => s.table,
+        LitShadow::Faces(maps) => maps.first().and_then(|m| m.table),
+        _ => None,
+    };
+    if let Some(table) = table {
+        super::shadow_map::bind_table(gl, program, table);
+        program.set_u32(gl, "u_id_mask", super::shadow_map::id_mask(o.id_bits));
+        program.set_f32(gl, "u_priority_bias", o.priority_bias);
+    }
+    match shadow {
+        LitShadow::Faces(maps) => bind_six_spots(gl, program, o, &space, maps),
+        LitShadow::Map(s) => bind_one_map(gl, program, o, &space, s),
+        _ => {}
+    }
+}
+
+/// The light's camera, colour and cone.
+fn set_light(ctx: &PassContext, program: &Program, lp: &LightPlan) {
+    let gl = ctx.gl;
+    let light = &ctx.scene.lights[lp.light];
     program.set_mat4(gl, "u_view_proj", &ctx.plan.camera.view_proj);
     program.set_i32(gl, "u_texture", 0);
     program.set_vec3(gl, "u_light_pos", light.position);
     program.set_vec3(
         gl,
         "u_light_color",
-        light.color * ctx.options.lighting.intensity,
+        light.color * ctx.settings.lighting.intensity,
     );
     let (dir, cos_cutoff, cos_inner) = match light.kind {
         LightKind::Spot {
@@ -83,8 +107,17 @@ fn bind_maps(ctx: &PassContext, program: &Program, lp: &LightPlan, shadow: &LitS
     program.set_f32(gl, "u_cos_cutoff", cos_cutoff);
     program.set_f32(gl, "u_cos_inner", cos_inner);
     program.set_f32(gl, "u_radius", light.radius);
-    let o = &ctx.options.shadow_map;
-    // SAFETY: fixed-function state and a texture of our own on unit 1.
+}
+
+/// The lit pass's polygon offset (the paper's, toward the camera, with a map) and no clip
+/// distance left on from an earlier draw.
+fn set_offset_and_clips(
+    gl: &glow::Context,
+    o: &ShadowMapOptions,
+    lp: &LightPlan,
+    shadow: &LitShadow,
+) {
+    // SAFETY: fixed-function state only.
     unsafe {
         match (
             offset_for(o, lp.order),
@@ -105,40 +138,45 @@ fn bind_maps(ctx: &PassContext, program: &Program, lp: &LightPlan, shadow: &LitS
             }
         }
     }
-    let space = TexgenFrame::of(ctx, lp);
-    let table = match shadow {
-        LitShadow::Map(s) => s.table,
-        LitShadow::Faces(maps) => maps.first().and_then(|m| m.table),
-        _ => None,
-    };
-    if let Some(table) = table {
-        super::shadow_map::bind_table(gl, program, table);
-        program.set_u32(gl, "u_id_mask", super::shadow_map::id_mask(o.id_bits));
-        program.set_f32(gl, "u_priority_bias", o.priority_bias);
-    }
-    if let LitShadow::Faces(maps) = shadow {
-        program.set_mat4(gl, "u_view", &space.to_texgen_space);
-        program.set_f32(gl, "u_map_size", o.size as f32);
-        program.set_i32(gl, "u_pcf_size", o.pcf_size as i32);
-        program.set_i32(gl, "u_sm_alpha_func", o.alpha_func as i32);
-        program.set_f32(gl, "u_sm_alpha_ref", o.alpha_ref);
-        program.set_i32(gl, "u_face", -1);
-        for (i, m) in maps.iter().enumerate() {
-            let (texgen, depth) = space.texgens(m.view);
-            program.set_mat4(gl, &format!("u_texgens[{i}]"), &texgen);
-            program.set_mat4(gl, &format!("u_texgen_depths[{i}]"), &depth);
-            program.set_i32(gl, &format!("u_face_maps[{i}]"), 1 + i as i32);
-            // SAFETY: binds our depth textures to units 1-6.
-            unsafe {
-                gl.active_texture(glow::TEXTURE1 + i as u32);
-                gl.bind_texture(glow::TEXTURE_2D, Some(m.texture));
-            }
+}
+
+/// An omni light's six spot maps at once (`SIX_SPOTS`), on units 1-6.
+fn bind_six_spots(
+    gl: &glow::Context,
+    program: &Program,
+    o: &ShadowMapOptions,
+    space: &TexgenFrame,
+    maps: &[&ShadowBinding],
+) {
+    program.set_mat4(gl, "u_view", &space.to_texgen_space);
+    program.set_f32(gl, "u_map_size", o.size as f32);
+    program.set_i32(gl, "u_pcf_size", o.pcf_size as i32);
+    program.set_i32(gl, "u_sm_alpha_func", o.alpha_func as i32);
+    program.set_f32(gl, "u_sm_alpha_ref", o.alpha_ref);
+    program.set_i32(gl, "u_face", -1);
+    for (i, m) in maps.iter().enumerate() {
+        let (texgen, depth) = space.texgens(m.view);
+        program.set_mat4(gl, &format!("u_texgens[{i}]"), &texgen);
+        program.set_mat4(gl, &format!("u_texgen_depths[{i}]"), &depth);
+        program.set_i32(gl, &format!("u_face_maps[{i}]"), 1 + i as i32);
+        // SAFETY: binds our depth textures to units 1-6.
+        unsafe {
+            gl.active_texture(glow::TEXTURE1 + i as u32);
+            gl.bind_texture(glow::TEXTURE_2D, Some(m.texture));
         }
-        // SAFETY: back to unit 0 for the material textures.
-        unsafe { gl.active_texture(glow::TEXTURE0) };
-        return;
     }
-    let LitShadow::Map(s) = shadow else { return };
+    // SAFETY: back to unit 0 for the material textures.
+    unsafe { gl.active_texture(glow::TEXTURE0) };
+}
+
+/// One map (a spot's, a face's, a cube) on unit 1, with its texgen and clip planes.
+fn bind_one_map(
+    gl: &glow::Context,
+    program: &Program,
+    o: &ShadowMapOptions,
+    space: &TexgenFrame,
+    s: &ShadowBinding,
+) {
     let (texgen, depth) = space.texgens(s.view);
     program.set_mat4(gl, "u_view", &space.to_texgen_space);
     program.set_mat4(gl, "u_texgen", &texgen);
@@ -202,7 +240,7 @@ impl TexgenFrame {
     fn of(ctx: &PassContext, lp: &LightPlan) -> TexgenFrame {
         let camera_view = ctx.plan.camera.view;
         let light = ctx.scene.lights[lp.light].position;
-        let kind = ctx.options.shadow_map.texgen;
+        let kind = ctx.settings.shadow_map.texgen;
         TexgenFrame {
             to_texgen_space: match kind {
                 TexgenSpace::EyeLinear => camera_view,
@@ -318,7 +356,7 @@ pub fn draw(
         ..DrawState::OVER_DEPTH
     }
     .apply(gl);
-    lit_stencil(gl, shadow, ctx.options.lighting.light_once);
+    lit_stencil(gl, shadow, ctx.settings.lighting.light_once);
     bind_light(ctx, program, lp, shadow);
     draw_items(
         ctx,

@@ -12,7 +12,7 @@ pub mod stencil;
 
 use super::program::Program;
 use super::upload::{DrawItem, GpuScene};
-use crate::options::Options;
+use crate::plan::settings::PassSettings;
 use crate::plan::{Plan, normal_matrix};
 use crate::scene::{Cull, Scene};
 use glow::HasContext;
@@ -23,7 +23,8 @@ pub struct PassContext<'a> {
     pub scene: &'a Scene,
     pub gpu: &'a GpuScene,
     pub plan: &'a Plan,
-    pub options: &'a Options,
+    /// What the passes draw with (the options resolved for this frame).
+    pub settings: &'a PassSettings,
 }
 
 /// The state every frame starts from: whoever drew last (a UI painter in the viewer) may have

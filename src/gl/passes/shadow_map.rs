@@ -98,7 +98,7 @@ fn depth_resolution(bits: DepthBits) -> f32 {
 pub fn render(ctx: &PassContext, program: &Program, view: &MapView, target: &DepthTarget) {
     begin(ctx, view, target);
     let gl = ctx.gl;
-    let o = &ctx.options.shadow_map;
+    let o = &ctx.settings.shadow_map;
     program.bind(gl);
     program.set_mat4(gl, "u_view_proj", &view.view_proj);
     program.set_i32(gl, "u_texture", 0);
@@ -132,7 +132,7 @@ pub fn render(ctx: &PassContext, program: &Program, view: &MapView, target: &Dep
 /// Binds `target` and sets the depth pass's state: viewport, depth only, cleared, the offset.
 pub fn begin(ctx: &PassContext, view: &MapView, target: &DepthTarget) {
     let gl = ctx.gl;
-    let o = &ctx.options.shadow_map;
+    let o = &ctx.settings.shadow_map;
     let (size, cube_face) = (view.size, view.cube_face);
     // SAFETY: fixed-function state and a depth attachment of our own texture.
     unsafe {

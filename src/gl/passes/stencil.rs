@@ -96,7 +96,7 @@ fn draw_extruded(
     light_scissor: Option<Scissor>,
 ) {
     let gl = ctx.gl;
-    let o = &ctx.options.shadow_volume;
+    let o = &ctx.settings.shadow_volume;
     let mut drawn = v
         .extruded
         .iter()
@@ -174,7 +174,7 @@ pub fn draw(
     masked: bool,
 ) {
     let gl = ctx.gl;
-    let o = &ctx.options.shadow_volume;
+    let o = &ctx.settings.shadow_volume;
     begin(gl, o, !masked);
     if masked {
         // Count only where the mask bit is clear, into the count bits.

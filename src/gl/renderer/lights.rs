@@ -5,7 +5,7 @@ use super::*;
 impl<'a> FrameRun<'a> {
     /// Each planned light's passes: its volumes counted and lit through the stencil, or lit
     /// through its shadow maps (or without shadows). Returns the stencil counts asked for.
-    pub(super) fn light_passes(&mut self, maps: &[ViewMap]) -> Flow<Option<StencilImage>> {
+    pub(crate) fn light_passes(&mut self, maps: &[ViewMap]) -> Flow<Option<StencilImage>> {
         let plan = self.ctx.plan;
         let mut stencil_image = None;
         for (pi, lp) in plan.lights.iter().enumerate() {
@@ -25,7 +25,7 @@ impl<'a> FrameRun<'a> {
             } else {
                 self.timer
                     .begin(self.ctx.gl, PassId::light(lp.light, Stage::Lit));
-                if self.ctx.options.lighting.light_once {
+                if self.ctx.settings.lighting.light_once {
                     passes::lit::clear_marks(self.ctx.gl);
                 }
                 let bindings = self.bindings(maps, pi);
@@ -74,7 +74,7 @@ impl<'a> FrameRun<'a> {
     ) -> Flow<Option<StencilImage>> {
         let gl = self.ctx.gl;
         let lp = &self.ctx.plan.lights[pi];
-        let masked = self.ctx.options.hybrid.mask;
+        let masked = self.ctx.settings.hybrid.mask;
         let bindings = self.bindings(maps, pi);
         let mark = |run: &Self, overwrite: bool| {
             draw_maps(
@@ -124,7 +124,7 @@ impl<'a> FrameRun<'a> {
     /// stencil counts when the request asks for them.
     pub(super) fn volume_light(&mut self, lp: &LightPlan) -> Flow<Option<StencilImage>> {
         let gl = self.ctx.gl;
-        let o = self.ctx.options;
+        let o = self.ctx.settings;
         let fill = o.shadow_volume.shading == VolumeShading::Fill;
         self.timer
             .begin(gl, PassId::light(lp.light, Stage::Stencil));
@@ -169,7 +169,7 @@ impl<'a> FrameRun<'a> {
 
     /// Whether volume counts wrap rather than saturate.
     pub(super) fn counts_wrap(&self) -> bool {
-        self.ctx.options.shadow_volume.wrap == StencilWrap::Wrap
+        self.ctx.settings.shadow_volume.wrap == StencilWrap::Wrap
             || self.ctx.plan.stencil == StencilPasses::Separate
     }
 

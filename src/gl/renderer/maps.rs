@@ -6,9 +6,9 @@ use super::*;
 impl<'a> FrameRun<'a> {
     /// Every shadow-mapped light's views into their depth textures (drawn again only when
     /// the plan's key for the view changed).
-    pub(super) fn shadow_map_passes(&mut self) -> Flow<Vec<ViewMap>> {
+    pub(crate) fn shadow_map_passes(&mut self) -> Flow<Vec<ViewMap>> {
         let (gl, plan) = (self.ctx.gl, self.ctx.plan);
-        let sm = &self.ctx.options.shadow_map;
+        let sm = &self.ctx.settings.shadow_map;
         let mut maps: Vec<ViewMap> = Vec::new();
         let mut kinds: Vec<MapKey> = Vec::new();
         let any_ids = plan
@@ -36,108 +36,113 @@ impl<'a> FrameRun<'a> {
                     lp.light,
                 )
                 .map_err(RenderError::Gl)?;
-            // A priority buffer's mip chain (never a cube: priority maps are six spots).
-            let mipmapped = buffer == MapBuffer::Priority && sm.priority_mipmap;
-            for (vi, view) in lp.views.iter().enumerate() {
-                let cube = view.kind == ViewKind::Cube;
-                let size = view.map_size(sm.size);
-                let kind = MapKey {
-                    cube,
-                    size,
-                    bits: sm.depth_bits,
-                    buffer,
-                    levels: if mipmapped && !cube {
-                        priority_mips::levels(size)
-                    } else {
-                        1
-                    },
-                };
+            for vi in 0..lp.views.len() {
+                let (map, kind) = go_on!(self.map_view((pi, lp, vi), (table, table_changed), fbo));
                 if !kinds.contains(&kind) {
                     kinds.push(kind);
                 }
-                let (texture, mut holds) = self
-                    .shadow_maps
-                    .slot(gl, (lp.light, vi), kind)
-                    .map_err(RenderError::Gl)?;
-                let ids = if buffer == MapBuffer::Id {
-                    let (t, fresh) = self
-                        .shadow_maps
-                        .id_texture(gl, lp.light, vi, size)
-                        .map_err(RenderError::Gl)?;
-                    if fresh {
-                        holds = None;
-                    }
-                    Some(t)
-                } else {
-                    None
-                };
-                // Maps drawn with another table hold other priorities.
-                if table_changed {
-                    holds = None;
-                }
-                let key = lp.view_keys.get(vi).copied().flatten();
-                let faces: Vec<(Option<usize>, glam::Mat4)> = if key.is_some() && holds == key {
-                    self.cache.maps_reused += 1;
-                    Vec::new()
-                } else {
-                    self.cache.maps_rendered += 1;
-                    if cube {
-                        let eye = self.ctx.scene.lights[lp.light].position;
-                        (0..6)
-                            .map(|f| (Some(f), view.projection * cube_face_view(eye, f)))
-                            .collect()
-                    } else {
-                        vec![(None, view.view_proj())]
-                    }
-                };
-                let drawn = !faces.is_empty();
-                for (face, view_proj) in faces {
-                    let buffers = MapBuffers {
-                        depth: texture,
-                        ids,
-                        table,
-                        buffer,
-                    };
-                    go_on!(self.map_face(lp, vi, (face, view_proj), fbo, buffers));
-                }
-                if drawn && kind.levels > 1 {
-                    let mip_fbo = self.shadow_maps.fbo(gl).map_err(RenderError::Gl)?;
-                    priority_mips::build(
-                        gl,
-                        &self.programs.priority_mips,
-                        self.empty_vao,
-                        mip_fbo,
-                        (texture, size, kind.levels),
-                    );
-                }
-                self.shadow_maps.set_content(lp.light, vi, key);
-                if ids.is_none() {
-                    ShadowMaps::configure(
-                        gl,
-                        texture,
-                        (cube, kind.levels > 1),
-                        sm.compare,
-                        sm.filter,
-                    );
-                }
-                self.last_maps.push(LastMap {
-                    light: lp.light,
-                    view: vi,
-                    texture,
-                    ids,
-                    cube,
-                    size,
-                });
-                maps.push(ViewMap {
-                    plan_index: pi,
-                    view_index: vi,
-                    texture: ids.unwrap_or(texture),
-                    table,
-                });
+                maps.push(map);
             }
         }
         self.shadow_maps.release_unlike(gl, &kinds);
         Ok(ControlFlow::Continue(maps))
+    }
+
+    /// One view of a light into its map (its six faces for a cube), drawn again only when the
+    /// plan's key for it changed; the map for the lit passes and the kind of texture it holds.
+    fn map_view(
+        &mut self,
+        (pi, lp, vi): (usize, &LightPlan, usize),
+        (table, table_changed): (Option<glow::Texture>, bool),
+        fbo: Option<glow::Framebuffer>,
+    ) -> Flow<(ViewMap, MapKey)> {
+        let gl = self.ctx.gl;
+        let sm = &self.ctx.settings.shadow_map;
+        let (view, buffer) = (&lp.views[vi], lp.buffer);
+        // A priority buffer's mip chain (never a cube: priority maps are six spots).
+        let mipmapped = buffer == MapBuffer::Priority && sm.priority_mipmap;
+        let cube = view.kind == ViewKind::Cube;
+        let size = view.map_size(sm.size);
+        let kind = MapKey {
+            cube,
+            size,
+            bits: sm.depth_bits,
+            buffer,
+            levels: if mipmapped && !cube {
+                priority_mips::levels(size)
+            } else {
+                1
+            },
+        };
+        let (texture, mut holds) = self
+            .shadow_maps
+            .slot(gl, (lp.light, vi), kind)
+            .map_err(RenderError::Gl)?;
+        let ids = if buffer == MapBuffer::Id {
+            let (t, fresh) = self
+                .shadow_maps
+                .id_texture(gl, lp.light, vi, size)
+                .map_err(RenderError::Gl)?;
+            if fresh {
+                holds = None;
+            }
+            Some(t)
+        } else {
+            None
+        };
+        // Maps drawn with another table hold other priorities.
+        if table_changed {
+            holds = None;
+        }
+        let key = lp.view_keys.get(vi).copied().flatten();
+        let faces = if key.is_some() && holds == key {
+            self.cache.maps_reused += 1;
+            Vec::new()
+        } else {
+            self.cache.maps_rendered += 1;
+            view.face_view_projs(self.ctx.scene.lights[lp.light].position)
+        };
+        let drawn = !faces.is_empty();
+        for (face, view_proj) in faces {
+            let buffers = MapBuffers {
+                depth: texture,
+                ids,
+                table,
+                buffer,
+            };
+            go_on!(self.map_face(lp, vi, (face, view_proj), fbo, buffers));
+        }
+        if drawn && kind.levels > 1 {
+            let mip_fbo = self.shadow_maps.fbo(gl).map_err(RenderError::Gl)?;
+            priority_mips::build(
+                gl,
+                &self.programs.priority_mips,
+                self.empty_vao,
+                mip_fbo,
+                (texture, size, kind.levels),
+            );
+        }
+        self.shadow_maps.set_content(lp.light, vi, key);
+        if ids.is_none() {
+            ShadowMaps::configure(gl, texture, (cube, kind.levels > 1), sm.compare, sm.filter);
+        }
+        self.last_maps.push(LastMap {
+            light: lp.light,
+            view: vi,
+            texture,
+            ids,
+            cube,
+            size,
+        });
+        Ok(ControlFlow::Continue((
+            ViewMap {
+                plan_index: pi,
+                view_index: vi,
+                texture: ids.unwrap_or(texture),
+                table,
+            },
+            kind,
+        )))
     }
 
     /// One view (or cube face) of a light drawn into its map, and copied there from the frame
@@ -151,7 +156,7 @@ impl<'a> FrameRun<'a> {
         buffers: MapBuffers,
     ) -> Flow<()> {
         let gl = self.ctx.gl;
-        let size = lp.views[vi].map_size(self.ctx.options.shadow_map.size);
+        let size = lp.views[vi].map_size(self.ctx.settings.shadow_map.size);
         let shown = face.or(Some(vi));
         let texture = buffers.depth;
         // ID buffers are drawn through the FBO: their IDs are colour, the frame's is not theirs.

@@ -115,7 +115,7 @@ impl<'a> FrameRun<'a> {
     ) -> (Vec<u8>, (Option<u64>, Option<u64>)) {
         let gl = self.ctx.gl;
         let lp = &self.ctx.plan.lights[pi];
-        let masked = self.ctx.options.hybrid.mask;
+        let masked = self.ctx.settings.hybrid.mask;
         let bindings = self.bindings(maps, pi);
         let pass = |kind| {
             draw_maps(

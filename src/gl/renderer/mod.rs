@@ -1,10 +1,8 @@
-//! Executes a frame's plan with GL: owns the programs, the scene's GPU copy, the framebuffer and
-//! the shadow maps, runs the passes in the paper's order and returns a [`Frame`].
-//!
-//! Order (paper 3.1): for each shadow-mapped light, its views into depth textures (drawn into the
-//! frame's depth buffer and copied, or rendered straight into the texture); then the unlit world;
-//! then each light's additive pass. Masks and the G-buffer, when asked for, are drawn after the
-//! timed frame.
+//! Draws a frame's plan with GL, stage by stage ([`FrameRun`]): owns the programs, the scene's
+//! GPU copy, the framebuffer and the shadow maps. The order of the stages, and the planner the
+//! stages between them consult, are the frame's run's (the `run` module): this layer decides
+//! nothing, it draws what the plan and the resolved settings say. Masks and the G-buffer, when
+//! asked for, are drawn after the timed frame.
 
 use super::caps::{self, Caps};
 use super::debug;
@@ -27,22 +25,20 @@ use super::upload::GpuScene;
 use super::volumes::{LightVolumes, VolumeBuffers};
 use crate::frame::{CacheStats, Syncs};
 use crate::frame::{Frame, HybridStats, Step, StepKind};
-use crate::geometry::projection::cube_face_view;
 use crate::images::{GBuffer, Mask, MaskValue, Rgba, StencilImage};
 use crate::options::{
-    Compare, CompareResult, DepthBits, Filter, MapBuffer, Options, Outside, Pipeline,
-    StencilPasses, StencilWrap, Technique, TexgenSpace, VolumeShading,
+    Compare, CompareResult, DepthBits, Filter, MapBuffer, Outside, StencilPasses, StencilWrap,
+    Technique, TexgenSpace, VolumeShading,
 };
-use crate::plan::auto::AutoMemory;
 use crate::plan::occlusion::DepthPyramid;
 use crate::plan::pass::{PassId, Stage};
-use crate::plan::planner::{DepthNeed, Planner};
 use crate::plan::scissor::Scissor;
-use crate::plan::volume_draws::VolumeStats;
+use crate::plan::settings::PassSettings;
+use crate::plan::volume_draws::{LightVolumeDraws, VolumeStats};
 use crate::plan::{LightPlan, Plan};
-use crate::plan::{fallback, fixed_function, profile};
-use crate::scene::{Camera, Scene};
+use crate::scene::Scene;
 use crate::shadow::views::ViewKind;
+use crate::shadow::volume::CasterGroups;
 use crate::truth::subdivision::Geometry;
 use glow::HasContext;
 use std::collections::HashMap;
@@ -53,18 +49,7 @@ use std::time::Instant;
 use thiserror::Error;
 
 /// Whether a frame goes on, or stopped after a walkthrough step with the frame so far.
-type Flow<T> = Result<ControlFlow<Frame, T>, RenderError>;
-
-/// Goes on with the value, or returns the stopped frame as the frame (in
-/// [`FrameRun::run`]).
-macro_rules! or_stopped {
-    ($flow:expr) => {
-        match $flow? {
-            ControlFlow::Continue(v) => v,
-            ControlFlow::Break(frame) => return Ok(frame),
-        }
-    };
-}
+pub(crate) type Flow<T> = Result<ControlFlow<Frame, T>, RenderError>;
 
 /// Goes on with the value, or passes the stopped frame up.
 macro_rules! go_on {
@@ -168,18 +153,8 @@ struct LastMap {
     size: u32,
 }
 
-/// Counts of what a renderer keeps across frames ([`Renderer::held`]).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
-pub struct Held {
-    /// Shadow-map and ID-buffer textures.
-    pub map_textures: usize,
-    /// Volume parts built and kept for the frames that draw them again.
-    pub volume_parts: usize,
-    /// Depth-pass parts' clip planes fitted to the last depth buffer.
-    pub depth_fits: usize,
-}
-
-pub struct Renderer {
+/// The GL side of the renderer: draws what a frame's plan says, stage by stage.
+pub struct Drawer {
     gl: Arc<glow::Context>,
     pub caps: Caps,
     programs: Programs,
@@ -203,9 +178,6 @@ pub struct Renderer {
     depth_reducer: Option<DepthReducer>,
     /// The shadow-map views of the last frame, for the depth-map debug view.
     last_maps: Vec<LastMap>,
-    /// The planner and what it keeps across frames (costs for `auto`, caster groups, the
-    /// depth it read, volume draws).
-    planner: Planner,
     /// The legacy entry points, on a compatibility-profile context (`gl.pipeline =
     /// fixed_function`).
     fixed: Option<FixedFunction>,
@@ -223,7 +195,7 @@ struct MapBuffers {
 }
 
 /// One shadow-mapped view's texture, by light plan and view index.
-struct ViewMap {
+pub(crate) struct ViewMap {
     plan_index: usize,
     view_index: usize,
     /// What the lit pass reads: the depth texture, or the ID buffer's colour.
@@ -232,9 +204,9 @@ struct ViewMap {
     table: Option<glow::Texture>,
 }
 
-impl Renderer {
+impl Drawer {
     /// Compiles the programs and probes the GL for a frame of `width`×`height`.
-    pub fn new(gl: Arc<glow::Context>, width: u32, height: u32) -> Result<Renderer, RenderError> {
+    pub fn new(gl: Arc<glow::Context>, width: u32, height: u32) -> Result<Drawer, RenderError> {
         let target = Framebuffer::new(&gl, width, height).map_err(RenderError::Gl)?;
         let caps = caps::probe(&gl, target.depth_stencil_bits(&gl));
         Self::with_caps(gl, target, caps)
@@ -243,7 +215,7 @@ impl Renderer {
     /// A second renderer on this one's context that takes its probed capabilities rather than
     /// probing again: the timer-query check's verdict can differ from one probe to the next
     /// on llvmpipe, and renderers compared in one run must time their passes alike.
-    pub fn sibling(&self, width: u32, height: u32) -> Result<Renderer, RenderError> {
+    pub fn sibling(&self, width: u32, height: u32) -> Result<Drawer, RenderError> {
         let target = Framebuffer::new(&self.gl, width, height).map_err(RenderError::Gl)?;
         Self::with_caps(self.gl.clone(), target, self.caps.clone())
     }
@@ -252,12 +224,12 @@ impl Renderer {
         gl: Arc<glow::Context>,
         target: Framebuffer,
         caps: caps::Caps,
-    ) -> Result<Renderer, RenderError> {
+    ) -> Result<Drawer, RenderError> {
         let programs = Programs::new(&gl)?;
         // SAFETY: creating an empty vertex array object.
         let empty_vao = unsafe { gl.create_vertex_array() }.map_err(RenderError::Gl)?;
         let timer = PassTimer::new(caps.has("timer_query"));
-        Ok(Renderer {
+        Ok(Drawer {
             gl,
             caps,
             programs,
@@ -273,7 +245,6 @@ impl Renderer {
             empty_vao,
             depth_reducer: None,
             last_maps: Vec::new(),
-            planner: Planner::default(),
             fixed: None,
         })
     }
@@ -303,22 +274,6 @@ impl Renderer {
         self.shadow_maps.texture_count()
     }
 
-    /// What the renderer keeps across frames, counted: long runs hold these flat.
-    pub fn held(&self) -> Held {
-        let (volume_parts, depth_fits) = self.planner.held_volumes();
-        Held {
-            map_textures: self.shadow_maps.texture_count(),
-            volume_parts,
-            depth_fits,
-        }
-    }
-
-    /// Drops the frusta static omni lights kept (`plan.keep_frusta`): the next frame chooses
-    /// them afresh for its own view.
-    pub fn forget_kept_frusta(&mut self) {
-        self.planner.forget_kept_frusta();
-    }
-
     /// Uploads a scene, replacing the previous one.
     pub fn load_scene(&mut self, scene: &Scene) -> Result<(), RenderError> {
         if let Some(old) = self.gpu.take() {
@@ -332,7 +287,6 @@ impl Renderer {
         self.volume_buffers.delete(&self.gl);
         self.extrusions.delete(&self.gl);
         self.fragments.delete(&self.gl);
-        self.planner.forget();
         Ok(())
     }
 
@@ -363,62 +317,6 @@ impl Renderer {
         Ok(())
     }
 
-    /// Plans and renders one frame of `scene` (which must be the loaded one).
-    pub fn render(&mut self, scene: &Scene, options: &Options) -> Result<Frame, RenderError> {
-        self.render_with(scene, options, FrameRequest::default())
-    }
-
-    /// Plans and renders one frame, with what `request` asks for besides the image.
-    pub fn render_with(
-        &mut self,
-        scene: &Scene,
-        options: &Options,
-        request: FrameRequest,
-    ) -> Result<Frame, RenderError> {
-        self.render_at(scene, &scene.camera, options, request)
-    }
-
-    /// Plans and renders one frame seen from `camera` instead of the scene's camera.
-    pub fn render_at(
-        &mut self,
-        scene: &Scene,
-        camera: &Camera,
-        options: &Options,
-        request: FrameRequest,
-    ) -> Result<Frame, RenderError> {
-        let (before, start) = (syncs::counted(), Instant::now());
-        let caps = self.caps_for(options)?;
-        let (options, fallbacks) = fixed_function::resolve_all(options, |f| caps.has(f));
-        let options = profile::resolve(&options, caps.is_software());
-        if options.gl.pipeline == Pipeline::FixedFunction && self.fixed.is_none() {
-            return Err(RenderError::Unsupported(
-                "gl.pipeline = fixed_function needs a compatibility-profile context with the \
-                 legacy entry points (EGL or OSMesa on Mesa give one; the window path and \
-                 OpenGL ES do not)"
-                    .into(),
-            ));
-        }
-        self.timer.allow_queries(caps.has("timer_query"));
-        let options = &options;
-        let plan = self.planner.plan(scene, camera, options);
-        let frame_only = request.frame_only;
-        let mut frame = self.execute(scene, &plan, options, request, start)?;
-        frame.fallbacks = fallbacks;
-        frame.cache.caster_groups_built = self.planner.take_groups_rebuilt();
-        // Frame-only timing has no per-light passes to learn from.
-        if !frame_only {
-            self.planner.record_costs(&plan, &frame.passes);
-        }
-        frame.syncs = syncs::counted().since(&before);
-        Ok(frame)
-    }
-
-    /// The probed capabilities less the features `gl.disable` names.
-    pub fn caps_for(&self, options: &Options) -> Result<Caps, RenderError> {
-        let disabled = fallback::disabled(options).map_err(RenderError::Unsupported)?;
-        Ok(self.caps.with_disabled(&disabled))
-    }
-
     /// A fence after every command sent so far: wait on it to know a frame left on the GPU
     /// (`FrameRequest::image_on_gpu`) is done.
     pub fn fence(&self) -> Result<syncs::Fence, RenderError> {
@@ -431,86 +329,39 @@ impl Renderer {
         check_errors(&self.gl)
     }
 
-    /// What `technique = auto` has measured so far.
-    pub fn auto_memory(&self) -> &AutoMemory {
-        self.planner.memory()
-    }
-
-    /// Where `technique = auto` takes each light's costs from: the frames' pass times
-    /// (the default), or costs the caller supplies (tests, a cost model of another machine).
-    pub fn set_cost_source(&mut self, source: crate::plan::auto::CostSource) {
-        self.planner.set_cost_source(source);
-    }
-
-    /// Gives `auto` the last frame's sampled errors (its masks against `truth::sampled`): the
-    /// GL layer measures no error itself.
-    pub fn record_errors(
-        &mut self,
-        samples: &[crate::truth::sampled::LightSample],
-        options: &Options,
-    ) {
-        self.planner.record_errors(samples, options);
-    }
-
-    /// The one limit no fallback lifts: a shadow map larger than the GL's textures. (Choices
-    /// that need a missing feature were replaced before planning: `plan::fallback`.)
-    fn check_support(&self, options: &Options, plan: &Plan) -> Result<(), RenderError> {
-        let size = plan.largest_map(options.shadow_map.size);
-        let max = self.caps.max_texture_size.max(1) as u32;
-        if plan.any_maps() && size > max {
-            return Err(RenderError::Unsupported(format!(
-                "a shadow map of {size}x{size} (shadow_map.size, or one of several frusta) \
-                 exceeds GL_MAX_TEXTURE_SIZE {max}"
-            )));
-        }
-        if options.gl.pipeline == Pipeline::FixedFunction {
-            for (t, why) in [
-                (Technique::Hybrid, "classifies pixels in a shader"),
-                (Technique::Tsm, "writes the light's own depth from a shader"),
-            ] {
-                if plan.any(t) {
-                    return Err(RenderError::Unsupported(format!(
-                        "technique = {t} {why}: it needs gl.pipeline = shaders"
-                    )));
-                }
-            }
-        }
-        Ok(())
-    }
-
-    /// Runs the passes of `plan` (made from `options` with their fallbacks already taken),
-    /// then, untimed, the measurement passes the request asks for.
-    fn execute(
-        &mut self,
-        scene: &Scene,
-        plan: &Plan,
-        options: &Options,
+    /// Readies a frame of `plan` drawn with `settings` (the options resolved for it): its
+    /// targets, the programs it needs and the models' poses; its stages are then called in
+    /// order (`run`), the measurements the request asks for drawn after them, untimed.
+    pub(crate) fn begin_frame<'a>(
+        &'a mut self,
+        scene: &'a Scene,
+        plan: &'a Plan,
+        settings: &'a PassSettings,
         request: FrameRequest,
         start: Instant,
-    ) -> Result<Frame, RenderError> {
-        self.check_support(options, plan)?;
-        let copy = self.prepare_targets(plan, options, request)?;
+    ) -> Result<FrameRun<'a>, RenderError> {
+        let copy = self.prepare_targets(plan, settings, request)?;
         let gl_arc = self.gl.clone();
-        let gl: &glow::Context = &gl_arc;
         // Compile what this frame needs before borrowing the programs for the passes.
-        let variants = self.lit_variants(gl, plan, options, request)?;
+        let variants = self.lit_variants(&gl_arc, plan, settings, request)?;
         // Animated models' vertices go up before anything draws them.
         let models_uploaded = self
             .gpu
             .as_mut()
             .ok_or(RenderError::NoScene)?
-            .sync_models(gl, scene);
-        let gpu = self.gpu.as_ref().ok_or(RenderError::NoScene)?;
+            .sync_models(&gl_arc, scene);
         self.timer.start_frame(!request.frame_only);
         self.last_maps.clear();
-        passes::reset_state(gl);
-        let run = FrameRun {
+        passes::reset_state(&gl_arc);
+        let gl: &glow::Context = &self.gl;
+        let gpu = self.gpu.as_ref().ok_or(RenderError::NoScene)?;
+        Ok(FrameRun {
             ctx: PassContext {
                 gl,
                 scene,
                 gpu,
                 plan,
-                options,
+                settings,
             },
             programs: &self.programs,
             variants,
@@ -519,11 +370,11 @@ impl Renderer {
             timer: &mut self.timer,
             shadow_maps: &mut self.shadow_maps,
             id_tables: &mut self.id_tables,
-            planner: &mut self.planner,
             volume_buffers: &mut self.volume_buffers,
             extrusions: &mut self.extrusions,
             fragments: &mut self.fragments,
             extruded: HashMap::new(),
+            volume_draws: HashMap::new(),
             depth_reducer: &mut self.depth_reducer,
             last_maps: &mut self.last_maps,
             empty_vao: self.empty_vao,
@@ -539,12 +390,18 @@ impl Renderer {
             },
             start,
             volume_stats: Vec::new(),
-            fixed: self
-                .fixed
-                .as_ref()
-                .filter(|_| options.gl.pipeline == Pipeline::FixedFunction),
-        };
-        run.run()
+            fixed: self.fixed.as_ref().filter(|_| settings.fixed_function),
+        })
+    }
+
+    /// Whether the legacy pipeline is loaded (`use_legacy`).
+    pub fn has_legacy(&self) -> bool {
+        self.fixed.is_some()
+    }
+
+    /// Lets the frames time passes with timer queries where `allowed` and they work.
+    pub fn allow_timer_queries(&mut self, allowed: bool) {
+        self.timer.allow_queries(allowed);
     }
 
     /// Sizes the frame (with room for a shadow map copied from it) and makes the measurement
@@ -552,10 +409,10 @@ impl Renderer {
     fn prepare_targets(
         &mut self,
         plan: &Plan,
-        options: &Options,
+        settings: &PassSettings,
         request: FrameRequest,
     ) -> Result<bool, RenderError> {
-        let sm = &options.shadow_map;
+        let sm = &settings.shadow_map;
         let copy = plan.any_maps() && copies_from_frame(sm);
         let largest = plan.largest_map(sm.size);
         let alloc = if copy { (largest, largest) } else { (0, 0) };
@@ -579,7 +436,7 @@ impl Renderer {
         &mut self,
         gl: &glow::Context,
         plan: &Plan,
-        options: &Options,
+        settings: &PassSettings,
         request: FrameRequest,
     ) -> Result<HashMap<LitVariant, String>, RenderError> {
         let shadow_mapped = plan.any_maps();
@@ -633,7 +490,7 @@ impl Renderer {
                     .filter(|_| buffered)
                     .map(|&buffer| LitVariant { buffer, ..v });
                 for v in std::iter::once(v).chain(with_buffers) {
-                    let defines = lit_defines(options, v, request.overlays.texel_grid);
+                    let defines = lit_defines(settings, v, request.overlays.texel_grid);
                     let key = self.programs.lit_variant(gl, &defines)?;
                     variants.insert(v, key);
                 }
@@ -699,7 +556,7 @@ impl Renderer {
 
 /// One frame being drawn: the parts of the renderer the passes use, and what the frame has
 /// produced so far.
-struct FrameRun<'a> {
+pub(crate) struct FrameRun<'a> {
     ctx: PassContext<'a>,
     programs: &'a Programs,
     variants: HashMap<LitVariant, String>,
@@ -708,12 +565,13 @@ struct FrameRun<'a> {
     timer: &'a mut PassTimer,
     shadow_maps: &'a mut ShadowMaps,
     id_tables: &'a mut IdTables,
-    planner: &'a mut Planner,
     volume_buffers: &'a mut VolumeBuffers,
     extrusions: &'a mut Extrusions,
     fragments: &'a mut FragmentBuffers,
     /// Per light, the groups the GPU extrudes this frame.
     extruded: HashMap<usize, Vec<ExtrudedDraw>>,
+    /// Per light, the volume draws the planner made for this frame (`use_volume_draws`).
+    volume_draws: HashMap<usize, &'a LightVolumeDraws>,
     depth_reducer: &'a mut Option<DepthReducer>,
     last_maps: &'a mut Vec<LastMap>,
     empty_vao: glow::VertexArray,
@@ -729,14 +587,14 @@ struct FrameRun<'a> {
 }
 
 impl<'a> FrameRun<'a> {
-    /// The passes in the paper's order, then the untimed overlays and measurements.
-    fn run(mut self) -> Result<Frame, RenderError> {
-        // Shadow maps of every shadow-mapped light first (paper 3.1).
-        let maps = or_stopped!(self.shadow_map_passes());
-        or_stopped!(self.base_pass());
-        self.volume_draws()?;
-        self.subdivisions()?;
-        let stencil = or_stopped!(self.light_passes(&maps));
+    /// Ends the frame after its last stage: its pass times, the overlays and, untimed, what
+    /// the request asks for besides (the image, masks); waits for the GL only where the caller
+    /// wants pixels.
+    pub(crate) fn end(
+        self,
+        maps: Vec<ViewMap>,
+        stencil: Option<StencilImage>,
+    ) -> Result<Frame, RenderError> {
         set_scissor(self.ctx.gl, None);
         let gl = self.ctx.gl;
         let passes = self.timer.finish(gl);
@@ -858,7 +716,7 @@ fn check_errors(gl: &glow::Context) -> Result<(), RenderError> {
     }
 }
 
-impl Drop for Renderer {
+impl Drop for Drawer {
     fn drop(&mut self) {
         let gl_arc = self.gl.clone();
         let gl: &glow::Context = &gl_arc;

@@ -1,9 +1,13 @@
 //! The frame's programs: compiled at start, lit variants and ID-buffer depth programs on first use.
 
 use super::*;
-/// The `#define`s of the lit program for these options: with a shadow-map lookup (`shadow_map`,
+/// The `#define`s of the lit program for these settings: with a shadow-map lookup (`shadow_map`,
 /// from a cube map when `cube`) or without, writing light or the mask.
-pub(super) fn lit_defines(options: &Options, v: LitVariant, texel_grid: bool) -> Vec<&'static str> {
+pub(super) fn lit_defines(
+    settings: &PassSettings,
+    v: LitVariant,
+    texel_grid: bool,
+) -> Vec<&'static str> {
     let LitVariant {
         shadow_map,
         cube,
@@ -15,8 +19,8 @@ pub(super) fn lit_defines(options: &Options, v: LitVariant, texel_grid: bool) ->
     } = v;
     let mut d = Vec::new();
     if shadow_map {
-        d.extend(buffer_defines(buffer, options.shadow_map.id_edge_filter));
-        if buffer == MapBuffer::Priority && options.shadow_map.priority_mipmap && !cube {
+        d.extend(buffer_defines(buffer, settings.shadow_map.id_edge_filter));
+        if buffer == MapBuffer::Priority && settings.shadow_map.priority_mipmap && !cube {
             d.push("PRIORITY_MIPMAP");
         }
     }
@@ -33,7 +37,7 @@ pub(super) fn lit_defines(options: &Options, v: LitVariant, texel_grid: bool) ->
         if texel_grid && !mask {
             d.push("TEXEL_GRID");
         }
-        let o = &options.shadow_map;
+        let o = &settings.shadow_map;
         d.push("SHADOW_MAP");
         if cube {
             d.push("SHADOW_CUBE");

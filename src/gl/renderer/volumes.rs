@@ -1,10 +1,11 @@
-//! The base pass and what follows it before the lights: the depth the planner reads, the
-//! volume draws uploaded, the subdivided lights' fragments.
+//! The base pass and the stages between it and the lights: the depth the planner reads, each
+//! light's volume draws uploaded, the subdivided lights' fragments.
 
 use super::*;
+
 impl<'a> FrameRun<'a> {
-    /// The unlit world, then the depth the planner asks for.
-    pub(super) fn base_pass(&mut self) -> Flow<()> {
+    /// The unlit world.
+    pub(crate) fn base_pass(&mut self) -> Flow<()> {
         let gl = self.ctx.gl;
         self.timer.begin(gl, PassId::frame(Stage::Base));
         self.target.bind(gl);
@@ -13,34 +14,41 @@ impl<'a> FrameRun<'a> {
             None => passes::base::draw(&self.ctx, &self.programs.unlit),
         }
         go_on!(self.step(StepKind::Base, None, None, Self::color_image));
-        let need = self.planner.depth_need(
-            self.ctx.scene,
-            self.ctx.plan,
-            self.ctx.options,
-            self.target.float_depth,
-        );
-        self.cache.depth_reused = need == DepthNeed::Reuse;
-        if let DepthNeed::Read { reduced } = need {
-            self.timer.end(gl);
-            let t = Instant::now();
-            let depth = self.read_depth(reduced)?;
-            self.timer.record_cpu(
-                PassId::frame(Stage::Occlusion),
-                t.elapsed().as_secs_f64() * 1e3,
-            );
-            self.target.bind(gl);
-            self.planner.take_depth(depth, self.ctx.options);
-        } else if need == DepthNeed::Reuse {
-            self.timer.end(gl);
-        }
         Ok(ControlFlow::Continue(()))
     }
 
-    /// The frame's depth for the planner: reduced by a shader, or read whole.
-    pub(super) fn read_depth(
+    /// Whether the frame's depth buffer is 32-bit float (part of what the planner's depth
+    /// is keyed by).
+    pub(crate) fn float_depth(&self) -> bool {
+        self.target.float_depth
+    }
+
+    /// The frame's depth for the planner after the base pass, timed as its own stage: reduced
+    /// by a shader to 4×4 block maxima, or read whole.
+    pub(crate) fn depth_for_planner(
         &mut self,
         reduced: bool,
     ) -> Result<Option<DepthPyramid>, RenderError> {
+        let gl = self.ctx.gl;
+        self.timer.end(gl);
+        let t = Instant::now();
+        let depth = self.read_depth(reduced)?;
+        self.timer.record_cpu(
+            PassId::frame(Stage::Occlusion),
+            t.elapsed().as_secs_f64() * 1e3,
+        );
+        self.target.bind(gl);
+        Ok(depth)
+    }
+
+    /// The planner takes the last frame's depth: nothing is read, the base pass ends here.
+    pub(crate) fn depth_reused(&mut self) {
+        self.timer.end(self.ctx.gl);
+        self.cache.depth_reused = true;
+    }
+
+    /// The frame's depth: reduced by a shader, or read whole.
+    fn read_depth(&mut self, reduced: bool) -> Result<Option<DepthPyramid>, RenderError> {
         let gl = self.ctx.gl;
         let (w, h) = (self.target.width, self.target.height);
         if !reduced {
@@ -58,52 +66,49 @@ impl<'a> FrameRun<'a> {
         Ok(reducer.read(gl, &self.programs.depth_reduce, self.empty_vao, self.target))
     }
 
-    /// Each shadow-volume light's draws from the planner, uploaded.
-    pub(super) fn volume_draws(&mut self) -> Result<(), RenderError> {
-        let (gl, plan) = (self.ctx.gl, self.ctx.plan);
-        if !plan.any_volumes() {
-            return Ok(());
-        }
-        let prepare_start = Instant::now();
-        let mut builds_ms = 0.0;
-        for lp in plan.lights.iter().filter(|l| l.counts_volumes()) {
-            let v = self
-                .planner
-                .volume_draws(self.ctx.scene, plan, lp, self.ctx.options)?;
-            if let Err(e) = self.volume_buffers.upload(gl, v) {
-                self.planner.forget_volume_draws(lp.light);
-                return Err(RenderError::Gl(e));
-            }
-            let build_ms = if v.stats.rebuilt {
-                v.stats.build_ms
-            } else {
-                0.0
-            };
-            self.timer
-                .record_cpu(PassId::light(lp.light, Stage::VolumeBuild), build_ms);
-            builds_ms += build_ms;
-            self.cache.volume_parts_built += v.stats.parts_built;
-            self.cache.volume_parts_reused += v.stats.parts_reused;
-            self.volume_stats.push(v.stats);
-            self.extruded_draws(lp)?;
-        }
-        // The per-frame decisions on the pieces (receivers, rectangles, merges, depth clips)
-        // and the uploads, less the builds timed above.
-        let ms = prepare_start.elapsed().as_secs_f64() * 1e3 - builds_ms;
+    /// A shadow-volume light's draws, as the planner made them, uploaded with the meshes of
+    /// the groups the GPU extrudes (`groups`, where it has any); returns the milliseconds the
+    /// planner spent building its parts this frame (0 where it reused them).
+    pub(crate) fn upload_volumes(
+        &mut self,
+        lp: &LightPlan,
+        v: &LightVolumeDraws,
+        groups: Option<&CasterGroups>,
+    ) -> Result<f64, RenderError> {
+        self.volume_buffers
+            .upload(self.ctx.gl, v)
+            .map_err(RenderError::Gl)?;
+        let build_ms = if v.stats.rebuilt {
+            v.stats.build_ms
+        } else {
+            0.0
+        };
         self.timer
-            .record_cpu(PassId::frame(Stage::VolumePieces), ms.max(0.0));
-        Ok(())
+            .record_cpu(PassId::light(lp.light, Stage::VolumeBuild), build_ms);
+        self.cache.volume_parts_built += v.stats.parts_built;
+        self.cache.volume_parts_reused += v.stats.parts_reused;
+        self.volume_stats.push(v.stats);
+        if let Some(groups) = groups {
+            self.extruded_draws(lp, groups)?;
+        }
+        Ok(build_ms)
+    }
+
+    /// Records the milliseconds of a stage the CPU ran between the GL's passes.
+    pub(crate) fn record_cpu(&mut self, pass: PassId, ms: f64) {
+        self.timer.record_cpu(pass, ms);
+    }
+
+    /// Every volume light's draws for this frame's stencil passes, by light.
+    pub(crate) fn use_volume_draws(&mut self, draws: HashMap<usize, &'a LightVolumeDraws>) {
+        self.volume_draws = draws;
     }
 
     /// The light's groups the GPU extrudes: their meshes uploaded where their pose changed, and
     /// their draws for the stencil pass.
-    pub(super) fn extruded_draws(&mut self, lp: &LightPlan) -> Result<(), RenderError> {
-        if lp.extruded.is_empty() {
-            return Ok(());
-        }
+    fn extruded_draws(&mut self, lp: &LightPlan, groups: &CasterGroups) -> Result<(), RenderError> {
         let (gl, scene) = (self.ctx.gl, self.ctx.scene);
-        let groups = self.planner.casters(scene);
-        let double = self.ctx.options.shadow_volume.casters == crate::options::VolumeCasters::Both;
+        let double = self.ctx.settings.shadow_volume.casters == crate::options::VolumeCasters::Both;
         let light = scene.lights[lp.light].position;
         let mut draws = Vec::with_capacity(lp.extruded.len());
         for &(g, counting) in &lp.extruded {
@@ -124,7 +129,7 @@ impl<'a> FrameRun<'a> {
 
     /// Each subdivided light's fragments made current (kept while the light and the triangles
     /// in its range stay as they were).
-    pub(super) fn subdivisions(&mut self) -> Result<(), RenderError> {
+    pub(crate) fn subdivisions(&mut self) -> Result<(), RenderError> {
         let (gl, plan) = (self.ctx.gl, self.ctx.plan);
         if !plan.any(Technique::Subdivision) {
             return Ok(());
@@ -162,7 +167,7 @@ impl<'a> FrameRun<'a> {
         if !lp.counts_volumes() {
             return None;
         }
-        let draws = self.planner.last_volume_draws(lp.light)?;
+        let draws = self.volume_draws.get(&lp.light)?;
         let extruded = self.extruded.get(&lp.light).map_or(&[][..], Vec::as_slice);
         self.volume_buffers.with(draws, extruded)
     }

@@ -2,10 +2,10 @@
 //! lines that regenerate them.
 
 use super::{ReproduceError, Settings};
-use crate::gl::Renderer;
 use crate::images::Rgba;
 use crate::options::Options;
 use crate::report::bench::{Bench, BenchConfig, BenchRow, BenchSettings, Capture};
+use crate::run::Renderer;
 use crate::scene::Scene;
 use crate::scene::path::PathKey;
 use crate::truth;

@@ -25,8 +25,8 @@ const PAPER_FRAME: &[&str] = &["plan.enabled=false"];
 
 use super::bench::BenchRow;
 use super::table::Table;
-use crate::gl::{RenderError, Renderer};
 use crate::options::{OptionError, Options};
+use crate::run::{RenderError, Renderer};
 use crate::scene::Scene;
 use crate::scene_file::SceneFileError;
 use crate::scene_file::load::{LoadError, Loaded, load_file};
@@ -252,7 +252,9 @@ fn environment(renderer: &Renderer, settings: &Settings) -> Vec<String> {
     let mut lines = vec![
         format!(
             "Renderer: {} ({}), {}",
-            renderer.caps.renderer, renderer.caps.version, renderer.caps.vendor
+            renderer.caps().renderer,
+            renderer.caps().version,
+            renderer.caps().vendor
         ),
         format!(
             "{}x{}, {} warm-up and {} measured frames per configuration; times are medians; \
