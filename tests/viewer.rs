@@ -162,6 +162,22 @@ fn the_viewer_drives_the_builtin_scene_and_oa_dm1_from_scripts() {
         assert!(differing < total / 20, "{differing} px differ");
     }
 
+    // The scene view shows the frame's own texture (no read-back): the view's lower part is
+    // the lit scene, not the panel's background. Made to fail: with the texture not handed to
+    // egui, 0% of it is brighter than the background.
+    let shot = load(&d.join("viewer-builtin.png"));
+    let (sw, sh) = shot.dimensions();
+    let shown: Vec<f32> = (sh * 3 / 5..sh - 12)
+        .flat_map(|y| (sw * 2 / 5..sw - 12).map(move |x| (x, y)))
+        .map(|(x, y)| luma(shot.get_pixel(x, y)))
+        .collect();
+    let lit = shown.iter().filter(|&&l| l > 40.0).count();
+    println!(
+        "built-in: {lit} of {} view pixels lit in the window",
+        shown.len()
+    );
+    assert!(lit > shown.len() / 2, "{lit} of {}", shown.len());
+
     // The walkthrough's third step, the stencil view and the depth view show something else
     // than the scene.
     let scene = load(&d.join("viewer-timings.png"));

@@ -29,4 +29,4 @@ pub mod volumes;
 pub mod window;
 
 pub use context::{Backend, ContextError, GlApi, GlContext, Profile, create_context};
-pub use renderer::{Drawer, FILL_SHADE, FrameRequest, Overlays, RenderError};
+pub use renderer::{Drawer, FILL_SHADE, FrameRequest, FrameTexture, Overlays, RenderError};

@@ -28,7 +28,7 @@ use std::rc::Rc;
 use std::sync::Arc;
 use std::time::Instant;
 
-pub use crate::gl::{FrameRequest, Overlays, RenderError};
+pub use crate::gl::{FrameRequest, FrameTexture, Overlays, RenderError};
 
 /// Counts of what a renderer keeps across frames ([`Renderer::held`]).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
@@ -283,6 +283,11 @@ impl Renderer {
     /// The last frame's shadow map `k` of `light` (see [`Self::shadow_map_views`]) as grey.
     pub fn shadow_map_image(&self, light: usize, k: usize) -> Option<Rgba> {
         self.drawer.shadow_map_image(light, k)
+    }
+
+    /// The last frame's colour texture, for a window that shows it without reading it back.
+    pub fn frame_texture(&self) -> FrameTexture {
+        self.drawer.frame_texture()
     }
 
     /// Draws the last frame into the default framebuffer of a window, scaled to `width`×`height`.

@@ -11,6 +11,7 @@ use crate::images::Rgba;
 use crate::options::Options;
 use crate::run::{RenderError, Renderer};
 use crate::scene::Scene;
+use egui::{Pos2, Rect};
 use glow::HasContext;
 use std::path::Path;
 use std::sync::Arc;
@@ -51,6 +52,8 @@ struct Running {
     window: WindowGl,
     last: Instant,
     frame: Option<Frame>,
+    /// The frame's GL texture as registered with egui (see `show_frame_texture`).
+    native_frame: Option<(glow::Texture, egui::TextureId)>,
     view_size: [u32; 2],
     vsync: bool,
 }
@@ -121,6 +124,7 @@ impl App {
             window,
             last: Instant::now(),
             frame: None,
+            native_frame: None,
             view_size: [w.saturating_sub(340).max(16), h.max(16)],
             vsync: true,
         });
@@ -250,9 +254,13 @@ impl Running {
     /// mode asks for. Returns the selected light's shadow-map view count.
     fn update_textures(&mut self, state: &mut ViewerState) -> usize {
         let ctx = self.egui.egui_ctx.clone();
+        self.textures.frame = None;
         if let Some(f) = &self.frame {
-            let view = f.step_image.clone().unwrap_or_else(|| f.image.clone());
-            show(&ctx, &mut self.textures.view, "view", &view);
+            match &f.step_image {
+                Some(step) => show(&ctx, &mut self.textures.view, "view", step),
+                None if f.image.data.is_empty() => self.show_frame_texture(),
+                None => show(&ctx, &mut self.textures.view, "view", &f.image),
+            }
         }
         let light = state.selected_light;
         let depth_images = self.renderer.shadow_map_views(light);
@@ -305,6 +313,26 @@ impl Running {
             None => self.textures.aux = None,
         }
         depth_images
+    }
+}
+
+impl Running {
+    /// The frame's colour texture handed to egui as it lies on the GPU (registered once, and
+    /// again under a new id when a resize made a new one: replacing an id would have egui
+    /// delete the old texture, which the renderer owns and has deleted already).
+    fn show_frame_texture(&mut self) {
+        let t = self.renderer.frame_texture();
+        let id = match self.native_frame {
+            Some((texture, id)) if texture == t.texture => id,
+            _ => self.egui.painter.register_native_texture(t.texture),
+        };
+        self.native_frame = Some((t.texture, id));
+        let (aw, ah) = (t.alloc.0.max(1) as f32, t.alloc.1.max(1) as f32);
+        let (u, v) = (t.width as f32 / aw, t.height as f32 / ah);
+        // GL's rows run bottom up: the top of the view is the frame's last row.
+        let uv = Rect::from_min_max(Pos2::new(0.0, v), Pos2::new(u, 0.0));
+        let size = egui::Vec2::new(t.width as f32, t.height as f32);
+        self.textures.frame = Some((id, size, uv));
     }
 }
 

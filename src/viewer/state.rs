@@ -222,8 +222,10 @@ impl ViewerState {
             },
             // The timings overlay shows each pass.
             frame_only: false,
-            // The window shows the image egui was handed.
-            image_on_gpu: false,
+            // The window shows the frame's texture as it lies on the GPU; the pixels are read
+            // back only for a walkthrough step's image or a script's frame capture.
+            image_on_gpu: self.walkthrough.is_none()
+                && !self.pending.iter().any(|p| matches!(p, Pending::Frame(_))),
         }
     }
 

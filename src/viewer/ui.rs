@@ -13,8 +13,12 @@ use egui::{Color32, Key, Pos2, Rect, Sense, Stroke, TextureHandle, Vec2};
 /// The images the view can show, uploaded by the window loop.
 #[derive(Default)]
 pub struct Textures {
-    /// The rendered frame (or, in the walkthrough, the buffer of the step).
+    /// The rendered frame (or, in the walkthrough, the buffer of the step), uploaded.
     pub view: Option<TextureHandle>,
+    /// The rendered frame's own GL texture, shown where it lies (no read-back, no upload):
+    /// the texture, its size in pixels and the part of it the frame fills, flipped (GL's
+    /// rows run bottom up). Shown instead of `view` when set.
+    pub frame: Option<(egui::TextureId, Vec2, Rect)>,
     /// Depth map, stencil heat map or error image, with a caption.
     pub aux: Option<(TextureHandle, String)>,
 }
@@ -571,11 +575,15 @@ fn timings(ui: &mut egui::Ui, state: &ViewerState, frame: &Frame) {
         .iter()
         .any(|p| p.clock == crate::plan::pass::Clock::Gpu)
     {
-        "GPU timer queries"
+        "passes: GPU timer queries"
     } else {
-        "CPU time around glFinish"
+        "passes: CPU time around glFinish"
     };
-    ui.label(format!("frame {:.1} ms ({clock})", frame.frame_ms));
+    let span = match frame.completed {
+        true => "call to completion",
+        false => "call to submission",
+    };
+    ui.label(format!("frame {:.1} ms ({span}; {clock})", frame.frame_ms));
     ui.label(format!("waits for the GPU: {}", frame.syncs.describe()));
     for (name, ms) in &stages {
         ui.horizontal(|ui| {
@@ -727,15 +735,20 @@ pub fn draw(
             ((avail.x * ppp) as u32).max(16),
             ((avail.y * ppp) as u32).max(16),
         ];
+        let full = Rect::from_min_max(Pos2::ZERO, Pos2::new(1.0, 1.0));
+        let uploaded = |t: &TextureHandle| (t.id(), t.size_vec2(), full);
         let shown = match (&state.view, &textures.aux, state.walkthrough) {
-            (ViewMode::Scene, _, _) | (_, None, _) | (_, _, Some(_)) => textures.view.as_ref(),
-            (_, Some((t, _)), None) => Some(t),
+            (_, _, Some(_)) => textures.view.as_ref().map(uploaded),
+            (ViewMode::Scene, _, _) | (_, None, _) => {
+                textures.frame.or(textures.view.as_ref().map(uploaded))
+            }
+            (_, Some((t, _)), None) => Some(uploaded(t)),
         };
-        if let Some(t) = shown {
-            let tsize = t.size_vec2();
+        if let Some((id, tsize, uv)) = shown {
             let scale = (avail.x / tsize.x).min(avail.y / tsize.y);
             let r = ui.add(
-                egui::Image::new(t)
+                egui::Image::new((id, tsize))
+                    .uv(uv)
                     .fit_to_exact_size(tsize * scale.max(0.05))
                     .sense(Sense::click_and_drag()),
             );

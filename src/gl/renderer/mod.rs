@@ -183,6 +183,16 @@ pub struct Drawer {
     fixed: Option<FixedFunction>,
 }
 
+/// The frame's colour buffer as a texture ([`Drawer::frame_texture`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct FrameTexture {
+    pub texture: glow::Texture,
+    pub width: u32,
+    pub height: u32,
+    /// The texture's own size (larger where shadow maps are copied from the frame).
+    pub alloc: (u32, u32),
+}
+
 /// What one view's depth pass draws into and reads.
 #[derive(Clone, Copy)]
 struct MapBuffers {
@@ -527,6 +537,17 @@ impl Drawer {
             i += faces;
         }
         None
+    }
+
+    /// The last frame's colour texture, for a caller that shows it without reading it back
+    /// (bottom row first; the frame fills `width`×`height` of its `alloc`).
+    pub fn frame_texture(&self) -> FrameTexture {
+        FrameTexture {
+            texture: self.target.color,
+            width: self.target.width,
+            height: self.target.height,
+            alloc: self.target.alloc,
+        }
     }
 
     /// Draws the last frame into the default framebuffer of a window, scaled to `width`×`height`.
