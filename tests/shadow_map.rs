@@ -404,7 +404,7 @@ fn back_faces_in_the_map_need_no_offset_on_closed_meshes() {
 
 #[test]
 fn offsets_grow_per_light_under_the_paper_and_can_go_to_the_lit_pass() {
-    use shadowlab::gl::passes::shadow_map::offset_for;
+    use shadowlab::plan::settings::map_offset as offset_for;
     // The default keeps every light's offset; the paper's growth of 1 triples light 2's.
     let o = options_with(&[SM]).shadow_map;
     assert_eq!(offset_for(&o, 0), Some((1.1, 4.0)));

@@ -133,6 +133,9 @@ pub struct LightPlan {
     pub buffer: MapBuffer,
     /// Position among this frame's enabled lights: the paper grows the polygon offset with it.
     pub order: usize,
+    /// glPolygonOffset (factor, units) for this light's maps (`shadow_map.offset_*`, grown
+    /// with `order`), or None where the offset is off.
+    pub map_offset: Option<(f32, f32)>,
     /// Shadow-map views (shadow mapping only).
     pub views: Vec<ShadowView>,
     /// Volume parts (shadow volumes only) the CPU builds.
@@ -185,6 +188,9 @@ impl LightPlan {
 /// What the plan decided, for stats overlays and bench JSON.
 #[derive(Debug, Clone, Default, PartialEq, Serialize)]
 pub struct PlanStats {
+    /// The machine the decisions were weighed for (`plan.profile` resolved: `software` or
+    /// `gpu`).
+    pub profile: String,
     pub surfaces: usize,
     pub surfaces_visible: usize,
     pub triangles_visible: usize,

@@ -23,6 +23,15 @@ pub struct PassSettings {
     pub fixed_function: bool,
 }
 
+/// glPolygonOffset (factor, units) of the light with `order` among the shadowed lights, or None
+/// when the offset is off: the paper's growth makes each subsequent light's offset larger.
+pub fn map_offset(o: &ShadowMapOptions, order: usize) -> Option<(f32, f32)> {
+    o.offset.then(|| {
+        let k = 1.0 + o.offset_growth * order as f32;
+        (o.offset_factor * k, o.offset_units * k)
+    })
+}
+
 impl PassSettings {
     pub fn of(options: &Options) -> PassSettings {
         PassSettings {

@@ -663,7 +663,11 @@ fn timings(ui: &mut egui::Ui, state: &ViewerState, frame: &Frame) {
             p.split_parts, p.stencil_passes
         ));
     }
-    // Frame-time graph.
+    frame_time_graph(ui, state);
+}
+
+/// The last frames' times as a line.
+fn frame_time_graph(ui: &mut egui::Ui, state: &ViewerState) {
     let (rect, _) = ui.allocate_exact_size(Vec2::new(260.0, 50.0), Sense::hover());
     ui.painter()
         .rect_filled(rect, 2.0, Color32::from_black_alpha(120));

@@ -14,7 +14,6 @@ use super::FixedFunction;
 use crate::gl::legacy::{self, Legacy};
 use crate::gl::passes::PassContext;
 use crate::gl::passes::lit::{LitShadow, ShadowBinding, finish, lit_stencil, stencil_gate};
-use crate::gl::passes::shadow_map::offset_for;
 use crate::gl::passes::state::DrawState;
 use crate::options::{AlphaTestFunc, CompareResult, OffsetPass, Outside};
 use crate::plan::LightPlan;
@@ -220,7 +219,7 @@ fn clips(ctx: &PassContext, maps: &[&ShadowBinding]) -> bool {
 /// the few units that keep clipped triangles from losing against their own depth.
 fn lit_offset(ctx: &PassContext, lp: &LightPlan, maps: &[&ShadowBinding]) -> bool {
     let o = &ctx.settings.shadow_map;
-    let paper = offset_for(o, lp.order).filter(|_| {
+    let paper = lp.map_offset.filter(|_| {
         !maps.is_empty() && matches!(o.offset_pass, OffsetPass::Lit | OffsetPass::Both)
     });
     let clipped = clips(ctx, maps).then_some((0.0, CLIPPED_UNITS));

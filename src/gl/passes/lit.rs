@@ -1,7 +1,6 @@
 //! One light's additive pass (paper 3.1 and 4: "draw lit world with additive blending"), and its
 //! mask variant, which writes the same fragments' decision instead of light.
 
-use super::shadow_map::offset_for;
 use super::state::DrawState;
 use super::{PassContext, draw_items};
 use crate::gl::program::{Program, has_clip_distances};
@@ -120,7 +119,7 @@ fn set_offset_and_clips(
     // SAFETY: fixed-function state only.
     unsafe {
         match (
-            offset_for(o, lp.order),
+            lp.map_offset,
             o.offset_pass,
             matches!(shadow, LitShadow::Map(_) | LitShadow::Faces(_)),
         ) {

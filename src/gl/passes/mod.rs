@@ -82,34 +82,47 @@ pub fn draw_items_with(
     mut extra: impl FnMut(&DrawItem),
 ) {
     let gl = ctx.gl;
-    let mut last_owner = None;
     // ID and priority buffers find each triangle's table entry from its place in the index
     // buffer: the item's first triangle plus gl_PrimitiveID.
     let tri_base = program.uniform("u_tri_base").cloned();
+    let alpha_func = program.uniform("u_alpha_func").cloned();
+    // What the last item set: consecutive items share owners, textures and state more often
+    // than not, so each is set only where it changes (the first item sets all of them).
+    let (mut owner, mut texture, mut alpha_code, mut culling) = (None, None, None, None);
     // SAFETY: the scene's VAO and buffers are valid; index ranges come from the GPU index buffer.
     unsafe {
         gl.bind_vertex_array(Some(ctx.gpu.vao));
         gl.active_texture(glow::TEXTURE0);
         for item in items {
-            if last_owner != Some(item.owner) {
+            if owner != Some(item.owner) {
                 let model = crate::shadow::volume::group_transform(ctx.scene, item.owner);
                 program.set_mat4(gl, "u_model", &model);
                 program.set_mat3(gl, "u_normal_model", &normal_matrix(&model));
-                last_owner = Some(item.owner);
+                owner = Some(item.owner);
             }
             let material = &ctx.scene.materials[item.material];
-            gl.active_texture(glow::TEXTURE0);
-            gl.bind_texture(
-                glow::TEXTURE_2D,
-                Some(ctx.gpu.texture_for(ctx.scene, item.material)),
-            );
+            let t = ctx.gpu.texture_for(ctx.scene, item.material);
+            if texture != Some(t) {
+                // `extra` may have left another unit active.
+                gl.active_texture(glow::TEXTURE0);
+                gl.bind_texture(glow::TEXTURE_2D, Some(t));
+                texture = Some(t);
+            }
             let alpha = if alpha_test {
                 material.alpha_test
             } else {
                 None
             };
-            program.set_i32(gl, "u_alpha_func", alpha.map_or(0, |a| a.code()));
-            apply_cull(gl, cull(material.cull));
+            let code = alpha.map_or(0, |a| a.code());
+            if alpha_code != Some(code) {
+                gl.uniform_1_i32(alpha_func.as_ref(), code);
+                alpha_code = Some(code);
+            }
+            let c = cull(material.cull);
+            if culling != Some(c) {
+                apply_cull(gl, c);
+                culling = Some(c);
+            }
             extra(item);
             if let Some(l) = &tri_base {
                 gl.uniform_1_i32(Some(l), (item.first_index / 3) as i32);

@@ -12,15 +12,6 @@ use crate::scene::Cull;
 use glam::Mat4;
 use glow::HasContext;
 
-/// glPolygonOffset (factor, units) of the light with `order` among the shadowed lights, or None
-/// when the offset is off: the paper's growth makes each subsequent light's offset larger.
-pub fn offset_for(o: &ShadowMapOptions, order: usize) -> Option<(f32, f32)> {
-    o.offset.then(|| {
-        let k = 1.0 + o.offset_growth * order as f32;
-        (o.offset_factor * k, o.offset_units * k)
-    })
-}
-
 /// Binds an ID or priority buffer's per-triangle table to unit 7 (`u_table`).
 pub fn bind_table(gl: &glow::Context, program: &Program, table: glow::Texture) {
     program.set_i32(gl, "u_table", 7);
@@ -71,8 +62,8 @@ pub struct MapView<'a> {
     pub size: u32,
     /// The cube face drawn into (cube maps).
     pub cube_face: Option<usize>,
-    /// The light's position among the frame's lights (the paper's offset growth).
-    pub order: usize,
+    /// The light's glPolygonOffset (factor, units), None where it is off (`LightPlan::map_offset`).
+    pub offset: Option<(f32, f32)>,
     /// The plan's casters for this view; `None` draws every caster.
     pub casters: Option<&'a [u32]>,
     /// The matrix whose depth is stored, when not `view_proj` (trapezoidal maps: drawn with
@@ -104,7 +95,7 @@ pub fn render(ctx: &PassContext, program: &Program, view: &MapView, target: &Dep
     program.set_i32(gl, "u_texture", 0);
     if let Some(depth) = view.depth_view_proj {
         program.set_mat4(gl, "u_depth_view_proj", &depth);
-        let (factor, units) = match (offset_for(o, view.order), o.offset_pass) {
+        let (factor, units) = match (view.offset, o.offset_pass) {
             (Some(f), OffsetPass::ShadowMap | OffsetPass::Both) => f,
             _ => (0.0, 0.0),
         };
@@ -193,7 +184,7 @@ pub fn begin(ctx: &PassContext, view: &MapView, target: &DepthTarget) {
         gl.disable(glow::BLEND);
         gl.disable(glow::STENCIL_TEST);
         // ID and priority buffers write no depth the offset could move: no bias.
-        match (offset_for(o, view.order), o.offset_pass) {
+        match (view.offset, o.offset_pass) {
             _ if view.buffer != MapBuffer::Depth => gl.disable(glow::POLYGON_OFFSET_FILL),
             (Some((factor, units)), OffsetPass::ShadowMap | OffsetPass::Both) => {
                 gl.enable(glow::POLYGON_OFFSET_FILL);

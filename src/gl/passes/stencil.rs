@@ -63,19 +63,32 @@ fn draw_parts(
     // entry point is given only where the GL has the extension.
     unsafe {
         gl.bind_vertex_array(Some(v.vao));
+        // What the last draw set: a light's parts mostly share their model and many their
+        // clip planes and bounds, so each is set only where it changes (the first draw sets
+        // all of them).
+        let (mut model, mut clip, mut range) = (None, None, None);
         for d in v.draws.iter().filter(|d| d.counting == counting) {
             if d.scissor.is_some() {
                 super::set_scissor(gl, d.scissor);
             }
-            if let Some(ext) = bounds {
+            if let Some(ext) = bounds
+                && range != Some(d.depth_bounds)
+            {
                 match d.depth_bounds {
-                    Some(range) => ext.enable(gl, range),
+                    Some(r) => ext.enable(gl, r),
                     None => ext.disable(gl),
                 }
+                range = Some(d.depth_bounds);
             }
-            program.set_mat4(gl, "u_model", &d.model);
-            for (name, plane) in DEPTH_CLIP_UNIFORMS.iter().zip(&d.depth_clip) {
-                program.set_vec4(gl, name, glam::Vec4::from_array(*plane));
+            if model != Some(d.model) {
+                program.set_mat4(gl, "u_model", &d.model);
+                model = Some(d.model);
+            }
+            if clip != Some(d.depth_clip) {
+                for (name, plane) in DEPTH_CLIP_UNIFORMS.iter().zip(&d.depth_clip) {
+                    program.set_vec4(gl, name, glam::Vec4::from_array(*plane));
+                }
+                clip = Some(d.depth_clip);
             }
             if d.indexed {
                 gl.draw_elements(glow::TRIANGLES, d.count, glow::UNSIGNED_INT, d.first * 4);

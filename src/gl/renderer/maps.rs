@@ -178,7 +178,7 @@ impl<'a> FrameRun<'a> {
             view_proj,
             size,
             cube_face: face,
-            order: lp.order,
+            offset: lp.map_offset,
             casters: lp.view_casters.get(vi).map(Vec::as_slice),
             depth_view_proj: lp.views[vi].depth_view_proj,
             buffer: buffers.buffer,

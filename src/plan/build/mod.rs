@@ -75,6 +75,7 @@ impl Plan {
     ) -> Plan {
         let camera_setup = camera_for(scene, camera, options);
         let mut stats = PlanStats {
+            profile: options.plan.profile.to_string(),
             surfaces: scene.surfaces.len(),
             ..PlanStats::default()
         };
@@ -344,6 +345,7 @@ impl<'a> FrameFacts<'a> {
             technique: chosen.technique,
             buffer: chosen.buffer,
             order,
+            map_offset: crate::plan::settings::map_offset(&self.map_options, order),
             views: Vec::new(),
             volumes: Vec::new(),
             extruded: Vec::new(),
