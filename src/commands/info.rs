@@ -4,7 +4,7 @@
 use super::{CommonArgs, start_gl};
 use anyhow::Result;
 use serde_json::json;
-use shadowlab::plan::fixed_function;
+use shadowlab::plan::{fixed_function, profile};
 use shadowlab::presets::Preset;
 
 #[derive(clap::Args)]
@@ -20,6 +20,8 @@ pub fn run(common: &CommonArgs, args: &Args) -> Result<()> {
     let caps = &renderer.caps_for(&options)?;
     // What these options would run with: each option the GL cannot run, and its replacement.
     let (_, replaced) = fixed_function::resolve_all(&options, |f| caps.has(f));
+    // The machine the planner weighs its decisions for here (`plan.profile`).
+    let cost_profile = profile::effective(options.plan.profile, caps.is_software());
     let skipped: Vec<String> = ctx
         .skipped
         .iter()
@@ -37,6 +39,7 @@ pub fn run(common: &CommonArgs, args: &Args) -> Result<()> {
             "gl_version": [caps.major, caps.minor],
             "profile": caps.profile,
             "software": caps.is_software(),
+            "cost_profile": cost_profile.to_string(),
             "depth_bits": caps.depth_bits,
             "stencil_bits": caps.stencil_bits,
             "max_texture_size": caps.max_texture_size,
@@ -63,6 +66,13 @@ pub fn run(common: &CommonArgs, args: &Args) -> Result<()> {
         caps.version, caps.profile
     );
     println!("GLSL:           {}", caps.glsl_version);
+    println!(
+        "plan.profile:   {cost_profile} ({})",
+        match cost_profile {
+            shadowlab::options::Profile::Software => "decisions may read the frame back",
+            _ => "no decision reads the frame back",
+        }
+    );
     println!(
         "depth/stencil:  {}/{} bits (our framebuffer)",
         caps.depth_bits, caps.stencil_bits
