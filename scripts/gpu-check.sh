@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # The check a person with a GPU (or a lent machine) runs: what the GL is, whether the test suite
-# holds on it, and what each pass of the five benchmark flythroughs costs at 1920x1080, timed by
+# holds on it, and what each pass of the five benchmark flythroughs costs at 1920x1080 under both cost profiles, timed by
 # GPU timer queries where the GL has trustworthy ones. Everything lands in one folder, summed up
 # in one report (report.md); docs/gpu.md says how to read it. Nothing here needs a GPU: on Mesa
 # the same script runs and says which clock timed the passes.
@@ -58,6 +58,7 @@ for scene in $scenes; do
     log "bench $scene at $size, $frames frames per technique"
     "$bin" bench --scene "assets/scenes/$scene.toml" --size "$size" --frames "$frames" \
         --sweep technique=none,shadow_map,shadow_volume,subdivision \
+        --sweep plan.profile=software,gpu \
         --json "$out/bench-$scene.json" > "$out/bench-$scene.txt" 2>&1 \
         || log "bench $scene failed: $out/bench-$scene.txt"
 done

@@ -53,14 +53,17 @@ def bench_section(path):
     )
     lines += [
         "",
-        "| technique | frame ms (median / p95 / p99) | × shadows off | error | error excl. boundary |",
-        "|---|---|---:|---:|---:|",
+        "| configuration | frame ms (median / p95 / p99) | CPU ms | ms, 2 in flight | waits per frame | × shadows off | error | error excl. boundary |",
+        "|---|---|---:|---:|---:|---:|---:|---:|",
     ]
     for r in rows:
         f = r["frame_ms"]
         e = r.get("error", {})
         lines.append(
             f"| {r['label']} | {f['median']:.2f} / {f['p95']:.2f} / {f.get('p99', float('nan')):.2f} "
+            f"| {r.get('submit_ms', {}).get('median', float('nan')):.2f} "
+            f"| {r.get('pipelined_ms', float('nan')):.2f} "
+            f"| {r.get('syncs_per_frame', {}).get('total', float('nan')):.1f} "
             f"| {r['ratio_to_shadows_off']:.2f} | {100 * e.get('total', 0):.3f}% "
             f"| {100 * e.get('total_excl_boundary', 0):.3f}% |"
         )

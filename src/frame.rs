@@ -133,6 +133,9 @@ pub struct Frame {
     /// World to clip space of the camera that rendered the frame.
     pub view_proj: Mat4,
     pub passes: Vec<PassTime>,
+    /// How many frames back the GPU passes' times were taken (0: this frame's;
+    /// `FrameRequest::pass_times_later`).
+    pub passes_frames_ago: usize,
     /// Wall time from the call (planning, uploads, submission) to the frame's end: its
     /// completion where the frame waited for the GL anyway (`completed`: the caller asked for
     /// pixels), else its submission; a caller that needs completion without pixels waits on

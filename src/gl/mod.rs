@@ -17,6 +17,7 @@ pub mod passes;
 mod primitive_id_probe;
 pub mod priority_mips;
 pub mod program;
+pub mod query_ring;
 pub mod renderer;
 mod scratch;
 pub mod shadow_maps;

@@ -2,8 +2,11 @@
 //!
 //! Without timer queries (see `gl/caps`), each pass is timed on the CPU between two glFinish calls,
 //! which serialises the pipeline but still attributes time to the right pass. GL_TIMESTAMP is never
-//! used: llvmpipe's is not accurate. Query objects are pooled so long runs create none.
+//! used: llvmpipe's is not accurate. Query objects are pooled so long runs create none. A frame
+//! that wants its pass times without waiting for them (`finish_later`) gets the latest earlier
+//! frame's whose queries are done (`query_ring`).
 
+use super::query_ring::QueryRing;
 use super::syncs::SyncKind;
 use crate::plan::pass::{Clock, PassId, PassTime};
 use glow::HasContext;
@@ -24,6 +27,8 @@ pub struct PassTimer {
     open: Option<(PassId, Span)>,
     gpu_done: Vec<(PassId, glow::Query)>,
     results: Vec<PassTime>,
+    /// Frames' queries read later (`finish_later`).
+    ring: QueryRing<PassId, glow::Query>,
 }
 
 impl PassTimer {
@@ -36,6 +41,7 @@ impl PassTimer {
             open: None,
             gpu_done: Vec::new(),
             results: Vec::new(),
+            ring: QueryRing::default(),
         }
     }
 
@@ -133,7 +139,32 @@ impl PassTimer {
         std::mem::take(&mut self.results)
     }
 
+    /// Closes the frame without waiting: its CPU stages, and the GPU passes of the latest
+    /// earlier frame whose queries the GL has finished (with how many frames back it was);
+    /// this frame's queries wait in the ring. A result read once available does not wait, so
+    /// nothing is counted.
+    pub fn finish_later(&mut self, gl: &glow::Context) -> (Vec<PassTime>, usize) {
+        self.end(gl);
+        let frame = std::mem::take(&mut self.gpu_done);
+        // SAFETY: polls and reads of ended queries; a poll never blocks, and a read only
+        // follows a poll that said the result is there.
+        let c = self.ring.push_and_collect(
+            frame,
+            |q| unsafe { gl.get_query_parameter_u32(q, glow::QUERY_RESULT_AVAILABLE) != 0 },
+            |q| unsafe { gl.get_query_parameter_u64(q, glow::QUERY_RESULT) } as f64 / 1e6,
+        );
+        self.pool.extend(c.freed);
+        let mut passes = std::mem::take(&mut self.results);
+        passes.extend(c.results.into_iter().map(|(pass, ms)| PassTime {
+            pass,
+            ms,
+            clock: Clock::Gpu,
+        }));
+        (passes, c.frames_ago)
+    }
+
     pub fn delete(&mut self, gl: &glow::Context) {
+        self.pool.extend(self.ring.drain());
         for q in self.pool.drain(..) {
             // SAFETY: pooled queries are not active.
             unsafe { gl.delete_query(q) };

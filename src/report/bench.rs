@@ -495,6 +495,7 @@ const TIMED: FrameRequest = FrameRequest {
     },
     frame_only: true,
     image_on_gpu: true,
+    pass_times_later: false,
 };
 
 /// One frame's latency: from the call to the GL's completion, which bench waits for on a fence

@@ -226,6 +226,8 @@ impl ViewerState {
             // back only for a walkthrough step's image or a script's frame capture.
             image_on_gpu: self.walkthrough.is_none()
                 && !self.pending.iter().any(|p| matches!(p, Pending::Frame(_))),
+            // Timer queries are read frames later, never waited for.
+            pass_times_later: true,
         }
     }
 

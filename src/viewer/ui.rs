@@ -584,6 +584,12 @@ fn timings(ui: &mut egui::Ui, state: &ViewerState, frame: &Frame) {
         false => "call to submission",
     };
     ui.label(format!("frame {:.1} ms ({span}; {clock})", frame.frame_ms));
+    if frame.passes_frames_ago > 0 {
+        ui.label(format!(
+            "GPU passes as timed {} frame(s) back (read without waiting)",
+            frame.passes_frames_ago
+        ));
+    }
     ui.label(format!("waits for the GPU: {}", frame.syncs.describe()));
     for (name, ms) in &stages {
         ui.horizontal(|ui| {

@@ -107,6 +107,12 @@ pub struct FrameRequest {
     /// frame's colour buffer, `bench` waits on a fence of its own. Masks, a stencil read or a
     /// walkthrough step still read what they ask for.
     pub image_on_gpu: bool,
+    /// Take the GPU passes' times without waiting for them (with timer queries): those of the
+    /// latest earlier frame whose queries are done (`Frame::passes_frames_ago` says how far
+    /// back), as the viewer's timings do. The CPU clock (no trusted queries) is unaffected.
+    /// `technique = auto` learns from them as from this frame's (for a frame or two after a
+    /// light changes technique, from its old one's passes).
+    pub pass_times_later: bool,
 }
 
 /// Debug drawing over a frame.
@@ -618,7 +624,10 @@ impl<'a> FrameRun<'a> {
     ) -> Result<Frame, RenderError> {
         set_scissor(self.ctx.gl, None);
         let gl = self.ctx.gl;
-        let passes = self.timer.finish(gl);
+        let (passes, passes_frames_ago) = match self.request.pass_times_later {
+            true => self.timer.finish_later(gl),
+            false => (self.timer.finish(gl), 0),
+        };
         // Only a caller that wants pixels makes the frame wait: the read-back would anyway.
         let completed = !self.request.image_on_gpu || self.request.masks;
         if completed {
@@ -647,6 +656,7 @@ impl<'a> FrameRun<'a> {
             completed,
             view_proj: plan.camera.view_proj,
             passes,
+            passes_frames_ago,
             frame_ms,
             gbuffer,
             masks,
@@ -704,6 +714,7 @@ impl<'a> FrameRun<'a> {
             completed: true,
             view_proj: plan.camera.view_proj,
             passes,
+            passes_frames_ago: 0,
             frame_ms: self.start.elapsed().as_secs_f64() * 1e3,
             gbuffer: None,
             masks: Vec::new(),
