@@ -120,6 +120,9 @@ pub struct CacheStats {
     /// the shadowed fragment triangles they drew.
     pub subdivisions_renewed: usize,
     pub fragment_triangles: usize,
+    /// Surface draw calls of the timed frame's passes (maps, base, lit): surfaces of one
+    /// state whose indices follow on are drawn as one (`gl::upload::Merge`).
+    pub surface_draws: usize,
 }
 
 #[derive(Debug, Clone)]

@@ -16,6 +16,37 @@ pub struct DrawItem {
     pub owner: SurfaceOwner,
 }
 
+/// What splits a run of surfaces into draws besides their owner and material.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Merge {
+    /// Each surface's baked light too: the base pass binds its lightmap and baked mode.
+    ByLightmap,
+    /// The owner and material alone: the passes that draw light or depth read no lightmap
+    /// (a merged item's `lightmap` and `baked` are its first surface's, and mean nothing).
+    ByMaterial,
+    /// A depth pass's state alone: the owner and the culling, and the material only where it
+    /// is alpha-tested (`alpha_test`: the pass tests alpha). Surfaces of other materials
+    /// join one draw (its `material` is the first's: its culling, and no alpha test).
+    Depth { alpha_test: bool },
+}
+
+impl Merge {
+    /// Whether surface `b` may join a draw that `a` began, by this merge's state.
+    fn joins(self, scene: &Scene, a: &DrawItem, b: &crate::scene::Surface) -> bool {
+        let (ma, mb) = (&scene.materials[a.material], &scene.materials[b.material]);
+        match self {
+            Merge::ByLightmap => {
+                a.material == b.material && a.lightmap == b.lightmap && a.baked == b.baked
+            }
+            Merge::ByMaterial => a.material == b.material,
+            Merge::Depth { alpha_test } => {
+                let tested = |m: &crate::scene::Material| alpha_test && m.alpha_test.is_some();
+                a.material == b.material || (ma.cull == mb.cull && !tested(ma) && !tested(mb))
+            }
+        }
+    }
+}
+
 pub struct GpuScene {
     pub vao: glow::VertexArray,
     vbo: glow::Buffer,
@@ -219,36 +250,48 @@ impl GpuScene {
         uploaded
     }
 
-    /// The listed surfaces, merged into as few draws as the state order allows.
     /// Where surface `s`'s indices start in the GPU index buffer.
     pub fn gpu_first_index(&self, s: usize) -> u32 {
         self.gpu_first[s]
     }
 
-    pub fn draw_list_of(&self, scene: &Scene, surfaces: &[u32]) -> Vec<DrawItem> {
+    /// The listed surfaces, merged into as few draws as the state order allows.
+    pub fn draw_list_of(&self, scene: &Scene, merge: Merge, surfaces: &[u32]) -> Vec<DrawItem> {
         let mut sorted: Vec<usize> = surfaces.iter().map(|&s| s as usize).collect();
         sorted.sort_unstable_by_key(|&s| self.gpu_first[s]);
-        self.merged(scene, sorted)
+        self.merged(scene, merge, sorted)
     }
 
     /// The surfaces `keep` admits, merged into as few draws as the state order allows.
-    pub fn draw_list(&self, scene: &Scene, mut keep: impl FnMut(usize) -> bool) -> Vec<DrawItem> {
-        self.merged(scene, self.order.iter().copied().filter(|&s| keep(s)))
+    pub fn draw_list(
+        &self,
+        scene: &Scene,
+        merge: Merge,
+        mut keep: impl FnMut(usize) -> bool,
+    ) -> Vec<DrawItem> {
+        self.merged(
+            scene,
+            merge,
+            self.order.iter().copied().filter(|&s| keep(s)),
+        )
     }
 
     /// `surfaces` in the order given, each joining the previous draw when its state matches and
     /// its indices follow on.
-    fn merged(&self, scene: &Scene, surfaces: impl IntoIterator<Item = usize>) -> Vec<DrawItem> {
+    fn merged(
+        &self,
+        scene: &Scene,
+        merge: Merge,
+        surfaces: impl IntoIterator<Item = usize>,
+    ) -> Vec<DrawItem> {
         let mut items: Vec<DrawItem> = Vec::new();
         for s in surfaces {
             let surf = &scene.surfaces[s];
             let first = self.gpu_first[s];
             if let Some(last) = items.last_mut()
-                && last.material == surf.material
-                && last.lightmap == surf.lightmap
-                && last.baked == surf.baked
                 && last.owner == surf.owner
                 && last.first_index + last.index_count == first
+                && merge.joins(scene, last, surf)
             {
                 last.index_count += surf.index_count;
                 continue;

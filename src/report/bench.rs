@@ -430,6 +430,8 @@ pub struct Redone {
     /// Lights subdivided again or read from the disk cache (`technique = subdivision`: the
     /// light or the triangles it cuts moved).
     pub subdivisions_renewed: f64,
+    /// Surface draw calls (maps, base, lit passes).
+    pub surface_draws: f64,
 }
 
 impl Redone {
@@ -444,6 +446,7 @@ impl Redone {
         self.extrusions_uploaded += c.extrusions_uploaded as f64;
         self.depth_reused += f64::from(u8::from(c.depth_reused));
         self.subdivisions_renewed += c.subdivisions_renewed as f64;
+        self.surface_draws += c.surface_draws as f64;
     }
 
     /// Sums as per-frame means.
@@ -459,6 +462,7 @@ impl Redone {
             &mut self.extrusions_uploaded,
             &mut self.depth_reused,
             &mut self.subdivisions_renewed,
+            &mut self.surface_draws,
         ] {
             *v /= n;
         }

@@ -49,7 +49,11 @@ pub fn draw(ctx: &PassContext, ff: &FixedFunction) {
     }
     ff.clip_planes(gl, None);
     ff.bind_scene(ctx);
-    let items = ctx.gpu.draw_list(ctx.scene, |s| ctx.plan.visible[s]);
+    let items = ctx
+        .gpu
+        .draw_list(ctx.scene, crate::gl::upload::Merge::ByLightmap, |s| {
+            ctx.plan.visible[s]
+        });
     let lighting = &ctx.settings.lighting;
     let view = ctx.plan.camera.view;
     ff.draw_items(

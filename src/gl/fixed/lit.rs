@@ -248,7 +248,9 @@ fn draw_receivers(ctx: &PassContext, ff: &FixedFunction, receivers: &[u32], offs
     if !unsafe { gl.is_enabled(legacy::CLIP_PLANE0) } {
         ff.clip_planes(gl, None);
     }
-    let items = ctx.gpu.draw_list_of(ctx.scene, receivers);
+    let items = ctx
+        .gpu
+        .draw_list_of(ctx.scene, crate::gl::upload::Merge::ByMaterial, receivers);
     ff.bind_scene(ctx);
     // SAFETY: client state of our own vertex array.
     unsafe { (ff.legacy.disable_client_state)(legacy::COLOR_ARRAY) };

@@ -203,6 +203,7 @@ impl FixedFunction {
                     glow::UNSIGNED_INT,
                     (item.first_index as usize * 4) as i32,
                 );
+                super::passes::count_surface_draw();
             }
         }
     }

@@ -27,7 +27,11 @@ pub fn draw(ctx: &PassContext, program: &Program) {
         "u_lightmap_scale",
         (1u32 << ctx.settings.overbright_bits) as f32,
     );
-    let items = ctx.gpu.draw_list(ctx.scene, |s| ctx.plan.visible[s]);
+    let items = ctx
+        .gpu
+        .draw_list(ctx.scene, crate::gl::upload::Merge::ByLightmap, |s| {
+            ctx.plan.visible[s]
+        });
     let lighting = &ctx.settings.lighting;
     draw_items(ctx, program, &items, |item| {
         let level = match item.owner {

@@ -18,7 +18,11 @@ pub fn draw(ctx: &PassContext, program: &Program) {
     program.bind(gl);
     program.set_mat4(gl, "u_view_proj", &ctx.plan.camera.view_proj);
     program.set_i32(gl, "u_texture", 0);
-    let items = ctx.gpu.draw_list(ctx.scene, |s| ctx.plan.visible[s]);
+    let items = ctx
+        .gpu
+        .draw_list(ctx.scene, crate::gl::upload::Merge::ByMaterial, |s| {
+            ctx.plan.visible[s]
+        });
     draw_items(ctx, program, &items, |item| {
         let receives = ctx.scene.materials[item.material].receives_light;
         program.set_i32(gl, "u_receives", receives as i32);

@@ -48,7 +48,8 @@ pub fn mark(
     draw_items(
         ctx,
         program,
-        &ctx.gpu.draw_list_of(ctx.scene, receivers),
+        &ctx.gpu
+            .draw_list_of(ctx.scene, crate::gl::upload::Merge::ByMaterial, receivers),
         |_| {},
     );
     finish(gl);

@@ -360,7 +360,8 @@ pub fn draw(
     draw_items(
         ctx,
         program,
-        &ctx.gpu.draw_list_of(ctx.scene, receivers),
+        &ctx.gpu
+            .draw_list_of(ctx.scene, crate::gl::upload::Merge::ByMaterial, receivers),
         |_| {},
     );
     finish(gl);
@@ -378,7 +379,9 @@ pub fn draw_mask(
     let gl = ctx.gl;
     DrawState::OVER_DEPTH.apply(gl);
     bind_light(ctx, program, lp, shadow);
-    let items = ctx.gpu.draw_list_of(ctx.scene, receivers);
+    let items = ctx
+        .gpu
+        .draw_list_of(ctx.scene, crate::gl::upload::Merge::ByMaterial, receivers);
     let counted = match shadow {
         LitShadow::Stencil { .. } => Some((0xff, 1)),
         // Where the count bits are zero the shader decides (the map, or lit at a silhouette).

@@ -17,6 +17,22 @@ use crate::plan::{Plan, normal_matrix};
 use crate::scene::{Cull, Scene};
 use glow::HasContext;
 
+thread_local! {
+    /// Surface draw calls made on this thread (`surface_draws`).
+    static SURFACE_DRAWS: std::cell::Cell<usize> = const { std::cell::Cell::new(0) };
+}
+
+/// Surface draw calls made on this thread so far (the map, base, lit and measuring passes'):
+/// take one before and one after a frame. Counted per thread, as a context is current on one.
+pub fn surface_draws() -> usize {
+    SURFACE_DRAWS.with(std::cell::Cell::get)
+}
+
+/// Counts one surface draw call.
+pub fn count_surface_draw() {
+    SURFACE_DRAWS.with(|c| c.set(c.get().wrapping_add(1)));
+}
+
 /// What every pass reads.
 pub struct PassContext<'a> {
     pub gl: &'a glow::Context,
@@ -133,6 +149,7 @@ pub fn draw_items_with(
                 glow::UNSIGNED_INT,
                 (item.first_index as usize * 4) as i32,
             );
+            count_surface_draw();
         }
         gl.bind_vertex_array(None);
     }

@@ -5,6 +5,7 @@
 use super::{PassContext, draw_items_with};
 use crate::gl::program::Program;
 use crate::gl::target::Framebuffer;
+use crate::gl::upload::Merge;
 use crate::options::{
     AlphaCasters, CasterFaces, DepthBits, DepthSource, MapBuffer, OffsetPass, ShadowMapOptions,
 };
@@ -197,9 +198,12 @@ pub fn begin(ctx: &PassContext, view: &MapView, target: &DepthTarget) {
 
 /// The plan's casters for this view, or every caster.
 pub fn caster_items(ctx: &PassContext, view: &MapView) -> Vec<crate::gl::upload::DrawItem> {
+    let merge = Merge::Depth {
+        alpha_test: ctx.settings.shadow_map.alpha_casters == AlphaCasters::Test,
+    };
     match view.casters {
-        Some(list) => ctx.gpu.draw_list_of(ctx.scene, list),
-        None => ctx.gpu.draw_list(ctx.scene, |s| ctx.plan.casters[s]),
+        Some(list) => ctx.gpu.draw_list_of(ctx.scene, merge, list),
+        None => ctx.gpu.draw_list(ctx.scene, merge, |s| ctx.plan.casters[s]),
     }
 }
 

@@ -404,6 +404,7 @@ impl Drawer {
                 models_uploaded,
                 ..CacheStats::default()
             },
+            draws_before: passes::surface_draws(),
             start,
             volume_stats: Vec::new(),
             fixed: self.fixed.as_ref().filter(|_| settings.fixed_function),
@@ -607,6 +608,8 @@ pub(crate) struct FrameRun<'a> {
     copy: bool,
     stepper: Stepper,
     cache: CacheStats,
+    /// The thread's surface draw count when the frame began.
+    draws_before: usize,
     start: Instant,
     volume_stats: Vec<VolumeStats>,
     /// The legacy pipeline, when the frame draws with it.
@@ -634,6 +637,7 @@ impl<'a> FrameRun<'a> {
             syncs::finish(gl);
         }
         let frame_ms = self.start.elapsed().as_secs_f64() * 1e3;
+        let surface_draws = passes::surface_draws().wrapping_sub(self.draws_before);
         self.overlays();
         if completed {
             check_errors(gl)?;
@@ -665,7 +669,10 @@ impl<'a> FrameRun<'a> {
             step_image: None,
             stencil,
             plan_stats: plan.stats.clone(),
-            cache: self.cache,
+            cache: CacheStats {
+                surface_draws,
+                ..self.cache
+            },
             fallbacks: Vec::new(),
             hybrid,
             syncs: Syncs::default(),
