@@ -266,6 +266,12 @@ fn bench_under_the_gpu_profile_waits_for_nothing_in_a_timed_frame() {
             "assets/scenes/oa_dm1.toml",
             "--set",
             "plan.profile=gpu",
+            // Smaller and unsampled, so that it runs in seconds on softpipe too: the waits
+            // counted do not depend on either.
+            "--size",
+            "320x240",
+            "--set",
+            "estimate.samples=0",
             "--frames",
             "3",
             "--warmup",
