@@ -77,20 +77,6 @@ impl Fence {
         // SAFETY: no one else holds the fence.
         unsafe { gl.delete_sync(self.0) };
     }
-
-    /// Whether the GL has run every command before the fence, without waiting (a poll is no
-    /// wait: nothing is counted).
-    pub fn signalled(&self, gl: &glow::Context) -> bool {
-        // SAFETY: the fence is live; a zero timeout returns at once.
-        let r = unsafe { gl.client_wait_sync(self.0, 0, 0) };
-        r == glow::ALREADY_SIGNALED || r == glow::CONDITION_SATISFIED
-    }
-
-    /// Deletes the fence without waiting.
-    pub fn delete(self, gl: &glow::Context) {
-        // SAFETY: no one else holds the fence.
-        unsafe { gl.delete_sync(self.0) };
-    }
 }
 
 /// Every wait counted on this thread so far: take one before and one after, and

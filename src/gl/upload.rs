@@ -33,13 +33,13 @@ pub enum Merge {
 impl Merge {
     /// Whether surface `b` may join a draw that `a` began, by this merge's state.
     fn joins(self, scene: &Scene, a: &DrawItem, b: &crate::scene::Surface) -> bool {
-        let (ma, mb) = (&scene.materials[a.material], &scene.materials[b.material]);
         match self {
             Merge::ByLightmap => {
                 a.material == b.material && a.lightmap == b.lightmap && a.baked == b.baked
             }
             Merge::ByMaterial => a.material == b.material,
             Merge::Depth { alpha_test } => {
+                let (ma, mb) = (&scene.materials[a.material], &scene.materials[b.material]);
                 let tested = |m: &crate::scene::Material| alpha_test && m.alpha_test.is_some();
                 a.material == b.material || (ma.cull == mb.cull && !tested(ma) && !tested(mb))
             }

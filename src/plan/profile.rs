@@ -22,11 +22,10 @@ pub fn effective(profile: Profile, software_renderer: bool) -> Profile {
     }
 }
 
-/// `options` with the decisions its profile turns off turned off, and `plan.profile` set to the
+/// The options with the decisions their profile turns off turned off, and `plan.profile` set to the
 /// profile it stood for (never `auto`).
-pub fn resolve(options: &Options, software_renderer: bool) -> Options {
-    let mut o = options.clone();
-    o.plan.profile = effective(options.plan.profile, software_renderer);
+pub fn resolve(mut o: Options, software_renderer: bool) -> Options {
+    o.plan.profile = effective(o.plan.profile, software_renderer);
     if o.plan.profile == Profile::Gpu {
         o.plan.occlusion = false;
         o.plan.depth_clip = false;
@@ -41,16 +40,16 @@ mod tests {
     #[test]
     fn auto_follows_the_renderer_and_gpu_turns_off_every_read_back() {
         let o = Options::default();
-        let soft = resolve(&o, true);
+        let soft = resolve(o.clone(), true);
         assert_eq!(soft.plan.profile, Profile::Software);
         assert!(soft.plan.occlusion && soft.plan.depth_clip);
-        let gpu = resolve(&o, false);
+        let gpu = resolve(o.clone(), false);
         assert_eq!(gpu.plan.profile, Profile::Gpu);
         assert!(!gpu.plan.occlusion && !gpu.plan.depth_clip && gpu.plan.depth_bounds_test);
         let mut forced = o.clone();
         forced.plan.profile = Profile::Gpu;
-        assert!(!resolve(&forced, true).plan.occlusion);
+        assert!(!resolve(forced.clone(), true).plan.occlusion);
         forced.plan.profile = Profile::Software;
-        assert!(resolve(&forced, false).plan.depth_clip);
+        assert!(resolve(forced, false).plan.depth_clip);
     }
 }

@@ -153,7 +153,7 @@ impl Renderer {
         let (before, start) = (syncs::counted(), Instant::now());
         let caps = self.caps_for(options)?;
         let (options, fallbacks) = fixed_function::resolve_all(options, |f| caps.has(f));
-        let options = &profile::resolve(&options, caps.is_software());
+        let options = &profile::resolve(options, caps.is_software());
         let settings = PassSettings::of(options);
         if settings.fixed_function && !self.drawer.has_legacy() {
             return Err(RenderError::Unsupported(
