@@ -100,8 +100,15 @@ impl Syncs {
 /// What the frame reused from earlier frames.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize)]
 pub struct CacheStats {
+    /// Shadow maps (views: a spot, a face of six spots, a cube) whose content was made this
+    /// frame in any way: drawn whole, or from their static map (the two counts below).
     pub maps_rendered: usize,
     pub maps_reused: usize,
+    /// Static maps (a view's casters that do not move) drawn, each then copied into its map
+    /// with the moving models drawn over the copy (`LightPlan::view_static_keys`).
+    pub maps_static_drawn: usize,
+    /// Maps made from their kept static map: copied, and only the moving models drawn.
+    pub maps_models_only: usize,
     /// The planner's depth taken from the last frame, not read back: the base pass drew the
     /// same thing (`plan.reuse_depth`).
     pub depth_reused: bool,
@@ -146,6 +153,10 @@ pub struct Frame {
     pub frame_ms: f64,
     /// Whether `frame_ms` includes the GL's completion of the frame.
     pub completed: bool,
+    /// Our own CPU work in the frame, outside GL calls: resolving the options, planning and
+    /// the volume draws' pieces and builds. On llvmpipe `frame_ms` also holds the driver's
+    /// vertex work on the calling thread; this does not.
+    pub own_ms: f64,
     /// What the camera sees per pixel (when masks were requested).
     pub gbuffer: Option<GBuffer>,
     /// Each planned light's decision per pixel (when masks were requested).

@@ -53,6 +53,7 @@ const PAPER: &[(&str, &str)] = &[
     ("shadow_volume.extrusion", "infinite"),
     ("shadow_volume.projection", "infinite"),
     ("shadow_volume.shading", "additive"),
+    ("shadow_volume.gpu_extrusion", "none"),
     ("lighting.light_once", "false"),
 ];
 
@@ -159,13 +160,15 @@ mod tests {
     }
 
     #[test]
-    fn the_paper_differs_from_the_defaults_in_the_planner_the_technique_the_casters_the_offset_growth_and_the_light_marks()
+    fn the_paper_differs_from_the_defaults_in_the_planner_the_technique_the_casters_the_offset_growth_the_light_marks_and_gpu_extrusion()
      {
         // Guards the claim in the options' docs that the other defaults are the paper's (the
         // casters: the paper's one-sided faces lose shadows on open worlds; the offset growth
         // erases later lights' contact shadows on maps with many lights; the light marks keep
         // overlapping triangles from taking a light twice; docs/checks.md; the texgen space:
-        // eye-linear planes round past the offset at Quake 3 scale, docs/shadow-maps.md).
+        // eye-linear planes round past the offset at Quake 3 scale, docs/shadow-maps.md; GPU
+        // extrusion: `auto` extrudes what moves on the GPU under the gpu profile, the paper
+        // builds every volume on the CPU).
         let keys: Vec<String> = Preset::Paper
             .differences(&Options::default())
             .into_iter()
@@ -180,6 +183,7 @@ mod tests {
                 "shadow_map.offset_growth",
                 "shadow_map.texgen",
                 "shadow_volume.casters",
+                "shadow_volume.gpu_extrusion",
                 "technique"
             ]
         );

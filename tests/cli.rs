@@ -293,3 +293,72 @@ fn bench_under_the_gpu_profile_waits_for_nothing_in_a_timed_frame() {
     assert!(row["pipelined_ms"].as_f64().unwrap() > 0.0);
     std::fs::remove_dir_all(&dir).ok();
 }
+
+/// Issue 39, as a person runs it: `bench --sweep technique=none,shadow_map` gives each row its
+/// CPU milliseconds per frame (`cpu_ms`, the call's part of each timed frame: median and 99th
+/// percentile) and its frame-by-frame ratio to the shadows-off frame at the same path frame
+/// (`ratio_median`, `ratio_p99`), in the JSON and the table, round-robin and `--sequential`.
+/// The shadows-off row is its own baseline: every ratio exactly 1. Each frame's CPU part lies
+/// inside its latency, so its median and tail do too. Made to fail: with `frame_ratios`
+/// dropping every baseline (every ratio 0), the ratios are not above 0.
+#[test]
+fn bench_gives_cpu_ms_and_frame_by_frame_ratios_to_shadows_off() {
+    let dir = temp("bench-ratios");
+    for sequential in [false, true] {
+        let json = dir.join(format!("r{sequential}.json"));
+        let mut c = shadowlab();
+        c.current_dir(&dir).args([
+            "bench",
+            "--sweep",
+            "technique=none,shadow_map",
+            "--size",
+            "320x240",
+            "--set",
+            "estimate.samples=0",
+            "--frames",
+            "5",
+            "--warmup",
+            "1",
+        ]);
+        if sequential {
+            c.arg("--sequential");
+        }
+        let table = stdout_of(c.arg("--json").arg(&json).output().unwrap());
+        for column in [
+            "CPU ms median",
+            "CPU ms p99",
+            "× shadows off",
+            "× off median",
+            "× off p99",
+        ] {
+            assert!(
+                table.contains(&format!("| {column} |")),
+                "{column}: {table}"
+            );
+        }
+        let rows: Vec<serde_json::Value> =
+            serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+        assert_eq!(rows.len(), 2);
+        for row in &rows {
+            let f = |v: &serde_json::Value| {
+                let x = v
+                    .as_f64()
+                    .unwrap_or_else(|| panic!("not a number: {v} in {row}"));
+                assert!(x.is_finite() && x >= 0.0, "{x}: {row}");
+                x
+            };
+            let (cpu, cpu_p99) = (f(&row["cpu_ms"]["median"]), f(&row["cpu_ms"]["p99"]));
+            assert!(cpu > 0.0 && cpu <= cpu_p99, "{row}");
+            assert_eq!(cpu, f(&row["submit_ms"]["median"]), "{row}");
+            assert!(cpu <= f(&row["frame_ms"]["median"]), "{row}");
+            assert!(cpu_p99 <= f(&row["frame_ms"]["p99"]), "{row}");
+            let (ratio, ratio_p99) = (f(&row["ratio_median"]), f(&row["ratio_p99"]));
+            assert!(ratio > 0.0 && ratio <= ratio_p99, "{row}");
+            if row["technique"] == "none" {
+                assert_eq!((ratio, ratio_p99), (1.0, 1.0), "{row}");
+                assert_eq!(f(&row["ratio_to_shadows_off"]), 1.0, "{row}");
+            }
+        }
+    }
+    std::fs::remove_dir_all(&dir).ok();
+}

@@ -151,8 +151,8 @@ fn info_json_reports_the_egl_path_and_each_missing_feature_as_a_fallback() {
         .count();
     assert_eq!(missing, fallbacks.len());
     // No options given: the defaults, which differ from the paper's frame in the planner, the
-    // technique, the casters (both faces), the offset growth, the light marks and the texgen
-    // space only.
+    // technique, the casters (both faces), the offset growth, the light marks, the texgen
+    // space and the GPU extrusion (`auto`) only.
     assert_eq!(v["preset"], "default");
     let differs: Vec<&str> = v["differs_from_paper"]
         .as_array()
@@ -169,6 +169,7 @@ fn info_json_reports_the_egl_path_and_each_missing_feature_as_a_fallback() {
             "shadow_map.offset_growth",
             "shadow_map.texgen",
             "shadow_volume.casters",
+            "shadow_volume.gpu_extrusion",
             "technique"
         ]
     );

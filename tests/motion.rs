@@ -5,6 +5,7 @@
 mod common;
 
 use common::{Footprint, Measurer, differing, load_scene_file, options_with};
+use shadowlab::frame::CacheStats;
 use shadowlab::gl::FrameRequest;
 use shadowlab::options::Options;
 use shadowlab::q3::md3;
@@ -12,6 +13,7 @@ use shadowlab::q3::pk3::{self, Vfs};
 use shadowlab::scene::Scene;
 use shadowlab::scene::motion::Rig;
 use shadowlab::scene::path::{self, FRAME_RATE_HZ, PathKey};
+use shadowlab::shadow::views::ViewKind;
 
 const SM: &str = "technique=shadow_map";
 const SV: &str = "technique=shadow_volume";
@@ -247,10 +249,6 @@ fn masks_equal_with_caches_off(mut scene: Scene) {
         &std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/paths/oa_dm1.path"),
     )
     .unwrap();
-    let request = FrameRequest {
-        masks: true,
-        ..FrameRequest::default()
-    };
     for technique in [SM, SV] {
         let cached = options_with(&[technique, "width=320", "height=240"]);
         let fresh = caches_off(&cached);
@@ -259,32 +257,153 @@ fn masks_equal_with_caches_off(mut scene: Scene) {
         a.load_scene(&scene).unwrap();
         let mut compared = 0;
         let mut redone = 0;
+        let (mut static_drawn, mut models_only) = (0, 0);
         // The light circles (side_room, 6 s a turn) and sarge runs while the camera walks:
         // every few frames for three seconds, and the first frames each in turn.
         for i in (0..8).chain((8..60).step_by(4)) {
             let posed = scene.pose_at(i as f64 / FRAME_RATE_HZ);
             let camera = keys[i].apply(&scene.camera);
-            let fa = a.render_at(&scene, &camera, &cached, request).unwrap();
             // The reference renderer forgets everything before each frame.
-            b.load_scene(&scene).unwrap();
-            let fb = b.render_at(&scene, &camera, &fresh, request).unwrap();
-            for (ma, mb) in fa.masks.iter().zip(&fb.masks) {
-                assert_eq!(
-                    differing(ma, mb),
-                    0,
-                    "{technique}, frame {i}, light {}: masks differ ({posed:?})",
-                    ma.light
-                );
-                compared += 1;
-            }
+            let (fa, n) = common::cached_against_fresh(
+                (&mut a, &mut b),
+                (&scene, &camera),
+                (&cached, &fresh),
+                &format!("{technique}, frame {i} ({posed:?})"),
+            );
+            compared += n;
             redone += fa.cache.maps_rendered + fa.cache.volume_parts_built;
+            static_drawn += fa.cache.maps_static_drawn;
+            models_only += fa.cache.maps_models_only;
         }
         assert!(compared > 40, "{compared} masks compared");
         assert!(
             redone > 0,
             "{technique}: the cached renderer redid work in motion"
         );
+        if technique == SM {
+            // The static lights' maps were made from their kept static maps with sarge drawn
+            // over the copy: the path the masks above hold to the cache-off frame's.
+            println!(
+                "static maps drawn {static_drawn}, maps made with the models only {models_only}"
+            );
+            assert!(
+                static_drawn > 0 && models_only > static_drawn,
+                "{static_drawn}, {models_only}"
+            );
+        }
     }
+}
+
+/// Per frame, the map counters along 100 frames of oa_dm1's flythrough with sarge running
+/// (`standing`: without his run) and only light `light` drawn.
+fn map_counts_along_the_path(light: usize, standing: bool) -> Vec<CacheStats> {
+    let (mut scene, _, _) = load_scene_file("oa_dm1");
+    if standing {
+        scene.motion.rigs.clear();
+        scene.motion.walks.clear();
+    }
+    let keys: Vec<PathKey> = path::read(
+        &std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/paths/oa_dm1.path"),
+    )
+    .unwrap();
+    let only = format!("lighting.only={light}");
+    let options = options_with(&[SM, "width=320", "height=240", only.as_str()]);
+    let (_ctx, mut r) = common::gl_on(shadowlab::options::BackendChoice::Egl, &options);
+    r.load_scene(&scene).unwrap();
+    (0..100)
+        .map(|i| {
+            scene.pose_at(i as f64 / FRAME_RATE_HZ);
+            let camera = keys[i].apply(&scene.camera);
+            let f = r
+                .render_at(&scene, &camera, &options, FrameRequest::default())
+                .unwrap();
+            f.cache
+        })
+        .collect()
+}
+
+#[test]
+fn a_static_light_keeps_its_static_map_and_redraws_only_the_running_player_over_it() {
+    // corridor_spot (a spot) and corridor_far (an omni light: one cube) reach sarge's route
+    // from every frame of the path's first 100 while the camera walks and turns.
+    for light in [0, 1] {
+        let running = map_counts_along_the_path(light, false);
+        let sum = |f: fn(&CacheStats) -> usize| running.iter().map(f).sum::<usize>();
+        let (drawn, static_drawn, models_only, reused) = (
+            sum(|c| c.maps_rendered),
+            sum(|c| c.maps_static_drawn),
+            sum(|c| c.maps_models_only),
+            sum(|c| c.maps_reused),
+        );
+        println!(
+            "light {light}, sarge running: {drawn} maps made, {static_drawn} static maps drawn, {models_only} from the kept static map, {reused} reused"
+        );
+        // The static map is drawn on the first frame and kept; every other frame copies it
+        // and draws sarge alone (he moves every frame, so the map itself is never reused).
+        assert_eq!(static_drawn, 1, "light {light}");
+        assert_eq!(models_only, 99, "light {light}");
+        assert_eq!((drawn, reused), (100, 0), "light {light}");
+        // Sarge standing: nothing moves in the light's range, so its map is drawn once and
+        // kept whole, without a static map.
+        let standing = map_counts_along_the_path(light, true);
+        let made: Vec<usize> = standing.iter().map(|c| c.maps_rendered).collect();
+        let split: usize = standing
+            .iter()
+            .map(|c| c.maps_static_drawn + c.maps_models_only)
+            .sum();
+        assert_eq!(made.iter().sum::<usize>(), 1, "light {light}: {made:?}");
+        assert_eq!(split, 0, "light {light}");
+    }
+}
+
+#[test]
+fn a_cube_face_draws_only_the_casters_in_its_frustum() {
+    let (scene, _, _) = load_scene_file("oa_dm1");
+    let options = options_with(&[SM, "width=320", "height=240"]);
+    let plan = shadowlab::plan::Plan::build(&scene, &options);
+    let mut cubes = 0;
+    for lp in &plan.lights {
+        for (vi, view) in lp.views.iter().enumerate() {
+            if view.kind != ViewKind::Cube {
+                continue;
+            }
+            cubes += 1;
+            let eye = scene.lights[lp.light].position;
+            let images = &lp.view_images[vi];
+            let all = &lp.view_casters[vi];
+            assert_eq!(images.len(), 6);
+            let mut listed = 0;
+            for (face, view_proj) in view.face_view_projs(eye) {
+                let image = &images[face.unwrap()];
+                let on_face: Vec<u32> = image.base.iter().chain(&image.moving).copied().collect();
+                listed += on_face.len();
+                // A caster left off a face lies wholly beyond one side of its frustum: its
+                // box's corners all outside the same clip plane.
+                for &c in all.iter().filter(|c| !on_face.contains(c)) {
+                    let corners = scene.surfaces[c as usize].bounds.corners();
+                    let clip: Vec<glam::Vec4> =
+                        corners.iter().map(|p| view_proj * p.extend(1.0)).collect();
+                    let outside = (0..3).any(|axis| {
+                        clip.iter().all(|q| q[axis] > q.w) || clip.iter().all(|q| q[axis] < -q.w)
+                    });
+                    assert!(
+                        outside,
+                        "light {} face {face:?}: caster {c} left off",
+                        lp.light
+                    );
+                }
+            }
+            // Each caster is drawn on the faces it reaches, not on all six.
+            println!(
+                "light {}: {} casters in range, {listed} drawn over six faces",
+                lp.light,
+                all.len()
+            );
+            assert!(listed < 3 * all.len(), "{listed} of {}", all.len());
+            assert!(listed >= all.len());
+        }
+    }
+    assert_eq!(cubes, 2, "corridor_far and side_room are cubes");
 }
 
 #[test]
@@ -359,13 +478,19 @@ fn ten_thousand_frames_in_motion_stay_flat() {
     }
     let before = Footprint::take(&gl);
     const FRAMES: usize = 10_000;
-    let mut held_max = shadowlab::run::Held::default();
+    // The most held over the first lap of the path, and over the laps after it.
+    let (mut held_lap, mut held_max) = (shadowlab::run::Held::default(), Default::default());
     for i in 200..200 + FRAMES {
         frame(&mut m, i);
         let h = m.renderer().held();
-        held_max.map_textures = held_max.map_textures.max(h.map_textures);
-        held_max.volume_parts = held_max.volume_parts.max(h.volume_parts);
-        held_max.depth_fits = held_max.depth_fits.max(h.depth_fits);
+        let most: &mut shadowlab::run::Held = if i < 200 + keys.len() {
+            &mut held_lap
+        } else {
+            &mut held_max
+        };
+        most.map_textures = most.map_textures.max(h.map_textures);
+        most.volume_parts = most.volume_parts.max(h.volume_parts);
+        most.depth_fits = most.depth_fits.max(h.depth_fits);
     }
     let after = Footprint::take(&gl);
     // The fixed frame (t = 0, the path's first pose) after it all: what the renderer keeps
@@ -390,7 +515,28 @@ fn ten_thousand_frames_in_motion_stay_flat() {
     }
     // The same tolerances as the still long run (hard case 10).
     after.assert_flat_since(&before);
-    // Flat caches: after the same frame the renderer keeps what it kept at the start (a cache
-    // that grows per frame keeps more). How long frames take is bench's to measure.
-    assert_eq!(held_last, held_first, "kept after the fixed frame");
+    // Flat caches: after the same frame the renderer keeps the maps it kept at the start (a
+    // cache that grows per frame keeps more), and once the path was walked the volume parts
+    // kept (a still light's pieces stay while out of view) and depth fits grow no more. How
+    // long frames take is bench's to measure.
+    assert_eq!(
+        held_last.map_textures, held_first.map_textures,
+        "maps kept after the fixed frame"
+    );
+    // What can be kept is bounded by the scene: per light, a part per piece kept, and at
+    // most a split pair per piece of the frame's; a cache keyed by anything per frame would
+    // pass that over 10 000 frames.
+    let groups = shadowlab::shadow::volume::CasterGroups::build(&m.scene);
+    let pieces: usize = groups
+        .groups
+        .iter()
+        .map(|g| g.chunks.len() + g.components.len())
+        .sum();
+    let bound = m.scene.lights.len() * 3 * pieces;
+    for held in [held_lap, held_max, held_last] {
+        assert!(
+            held.volume_parts <= bound && held.depth_fits <= bound,
+            "{held:?} against {bound} ({pieces} pieces)"
+        );
+    }
 }

@@ -57,6 +57,9 @@ fn options(sets: &[&str]) -> Options {
         "plan.reuse_depth_fits=true",
         "plan.reuse_depth=true",
         "plan.reuse_volume_draws=true",
+        // Pieces fitted to the view (`plan.profile = software`'s choice); tests/kept_volumes.rs
+        // holds the kept ones.
+        "plan.keep_volumes=false",
         "plan.cull_clipped=false",
         "plan.merge_pieces=false",
         "plan.counting=true",

@@ -44,6 +44,11 @@ impl Aabb {
         Vec3::select(positive, self.max, self.min)
     }
 
+    /// Whether `o` lies wholly inside (an empty `o` does).
+    pub fn contains(&self, o: &Aabb) -> bool {
+        o.is_empty() || (self.min.cmple(o.min).all() && o.max.cmple(self.max).all())
+    }
+
     pub fn union(&self, o: &Aabb) -> Aabb {
         Aabb {
             min: self.min.min(o.min),

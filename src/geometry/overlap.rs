@@ -26,6 +26,35 @@ pub fn overlapping_triangles(triangles: &[[Vec3; 3]]) -> usize {
         .count()
 }
 
+/// Triangles of one plane tested against each other at most: a surface with more in one plane
+/// is taken to overlap (its lit pass then marks the stencil, which is correct, only slower),
+/// so that a hostile file cannot make loading quadratic.
+const MOST_TESTED: usize = 4096;
+
+/// Whether two triangles of a surface (any surface: planar, curved or a triangle soup) cover
+/// some area twice, tested among the triangles that share a plane. Planes are told apart by
+/// their unit normal and distance rounded to 1/256 (a planar Quake 3 surface's vertices lie on
+/// its plane to far better than that), so coplanar triangles split across a rounding boundary
+/// are not compared: a surface's lit pass then adds a light twice where they overlap, as every
+/// surface did without `lighting.light_once`.
+pub fn covers_twice(triangles: &[[Vec3; 3]]) -> bool {
+    let mut planes: std::collections::HashMap<[i32; 4], Vec<[Vec3; 3]>> =
+        std::collections::HashMap::new();
+    for t in triangles {
+        let n = normal_of(t);
+        if n == Vec3::ZERO {
+            continue;
+        }
+        let d = n.dot(t[0]);
+        let key = [n.x, n.y, n.z, d].map(|c| (c * 256.0).round() as i32);
+        planes.entry(key).or_default().push(*t);
+    }
+    planes
+        .values()
+        .filter(|same_plane| same_plane.len() > 1)
+        .any(|same_plane| same_plane.len() > MOST_TESTED || overlapping_triangles(same_plane) > 0)
+}
+
 fn normal_of(t: &[Vec3; 3]) -> Vec3 {
     (t[1] - t[0]).cross(t[2] - t[0]).normalize_or_zero()
 }
@@ -104,6 +133,35 @@ mod tests {
             [v(0.5, 0.2), v(0.9, 0.2), v(0.6, 0.9)],
         ];
         assert_eq!(overlapping_triangles(&over), 1);
+    }
+
+    #[test]
+    fn a_surface_covers_twice_only_where_triangles_of_one_plane_overlap() {
+        let square = [
+            [v(0.0, 0.0), v(1.0, 0.0), v(1.0, 1.0)],
+            [v(0.0, 0.0), v(1.0, 1.0), v(0.0, 1.0)],
+        ];
+        assert!(!covers_twice(&square));
+        let over = [
+            square[0],
+            square[1],
+            [v(0.5, 0.2), v(0.9, 0.2), v(0.6, 0.9)],
+        ];
+        assert!(covers_twice(&over));
+        // The same triangle one unit above the square: seen from above it covers the same
+        // area, but it is not in the square's plane, so nothing is covered twice.
+        let lifted = [square[0], square[1], over[2].map(|p| p + Vec3::Z)];
+        assert!(!covers_twice(&lifted));
+        // A bent surface (a folded card) whose halves do not overlap.
+        let folded = [
+            [v(0.0, 0.0), v(1.0, 0.0), v(1.0, 1.0)],
+            [
+                Vec3::new(0.0, 0.0, -144.0),
+                Vec3::new(0.0, 1.0, -143.0),
+                Vec3::new(1.0, 1.0, -143.0),
+            ],
+        ];
+        assert!(!covers_twice(&folded));
     }
 
     #[test]

@@ -71,22 +71,23 @@ fn attributes(gl: &glow::Context) {
 
 impl Extrusions {
     /// Uploads `group`'s mesh (index `index`) unless it is there for this pose already;
-    /// returns whether it uploaded.
+    /// returns the milliseconds the CPU spent building it where it uploaded.
     pub fn ensure(
         &mut self,
         gl: &glow::Context,
         index: usize,
         group: &CasterGroup,
         double: bool,
-    ) -> Result<bool, String> {
+    ) -> Result<Option<f64>, String> {
         let built_from = (group.pose, double, group.connectivity.triangles.len());
         if self
             .groups
             .get(&index)
             .is_some_and(|u| u.built_from == built_from)
         {
-            return Ok(false);
+            return Ok(None);
         }
+        let start = std::time::Instant::now();
         let mesh = ExtrusionMesh::build(group, double);
         let mut indices =
             Vec::with_capacity(mesh.sides.len() + mesh.front_cap.len() + mesh.back_cap.len());
@@ -99,6 +100,7 @@ impl Extrusions {
             ranges[k] = (indices.len() as i32, list.len() as i32);
             indices.extend_from_slice(list);
         }
+        let build_ms = start.elapsed().as_secs_f64() * 1e3;
         // The old buffers are filled again.
         let buffers = match self.groups.remove(&index) {
             Some(u) => u.buffers,
@@ -125,7 +127,7 @@ impl Extrusions {
                 ranges,
             },
         );
-        Ok(true)
+        Ok(Some(build_ms))
     }
 
     /// Group `index`'s draw for a light at `light_world`, if its mesh is uploaded.

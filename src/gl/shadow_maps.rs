@@ -24,13 +24,20 @@ struct Slot {
     content: Option<u64>,
 }
 
+type Slots = std::collections::HashMap<(usize, usize), Slot>;
+
 /// The depth textures and the framebuffer used to render into them (the FBO path).
 #[derive(Default)]
 pub struct ShadowMaps {
-    slots: std::collections::HashMap<(usize, usize), Slot>,
+    slots: Slots,
+    /// Static maps: per view whose map is made from one, the depth of its casters that do not
+    /// move (`LightPlan::view_static_keys`), of its map's kind.
+    statics: Slots,
     /// ID buffers' colour textures (RGBA8: an ID's four bytes), with their size.
     ids: std::collections::HashMap<(usize, usize), (glow::Texture, u32)>,
     fbo: Option<glow::Framebuffer>,
+    /// The framebuffer a static map is read through when it is copied.
+    read_fbo: Option<glow::Framebuffer>,
 }
 
 /// Internal format, format and type of a depth texture of `bits`.
@@ -98,33 +105,156 @@ fn allocate(gl: &glow::Context, key: MapKey) -> Result<glow::Texture, String> {
     }
 }
 
+/// The texture of `at` in `slots`, (re)allocated to match `key`, and the key of what it holds.
+fn slot_in(
+    slots: &mut Slots,
+    gl: &glow::Context,
+    at: (usize, usize),
+    key: MapKey,
+) -> Result<(glow::Texture, Option<u64>), String> {
+    match slots.get(&at) {
+        Some(slot) if slot.key == key => return Ok((slot.texture, slot.content)),
+        Some(old) => {
+            // SAFETY: the old texture is ours and no longer referenced.
+            unsafe { gl.delete_texture(old.texture) };
+        }
+        None => {}
+    }
+    let texture = allocate(gl, key)?;
+    let content = None;
+    slots.insert(
+        at,
+        Slot {
+            texture,
+            key,
+            content,
+        },
+    );
+    Ok((texture, content))
+}
+
+/// Deletes the textures of `slots` whose kind none of `kinds` has (cube or not aside).
+fn release_in(slots: &mut Slots, gl: &glow::Context, kinds: &[MapKey]) {
+    slots.retain(|_, s| {
+        let keep = kinds.iter().any(|k| {
+            MapKey {
+                cube: s.key.cube,
+                ..*k
+            } == s.key
+        });
+        if !keep {
+            // SAFETY: our texture; no view of this frame reads it.
+            unsafe { gl.delete_texture(s.texture) };
+        }
+        keep
+    });
+}
+
 impl ShadowMaps {
-    /// The texture of `light`'s view `view`, (re)allocated to match, and the key of what it
+    /// The texture of view `at` (light, view), (re)allocated to match, and the key of what it
     /// holds.
     pub fn slot(
         &mut self,
         gl: &glow::Context,
-        (light, view): (usize, usize),
+        at: (usize, usize),
         key: MapKey,
     ) -> Result<(glow::Texture, Option<u64>), String> {
-        match self.slots.get(&(light, view)) {
-            Some(slot) if slot.key == key => return Ok((slot.texture, slot.content)),
-            Some(old) => {
-                // SAFETY: the old texture is ours and no longer referenced.
-                unsafe { gl.delete_texture(old.texture) };
-            }
-            None => {}
+        slot_in(&mut self.slots, gl, at, key)
+    }
+
+    /// The static map of view `at` (light, view; of the kind of its map), (re)allocated to
+    /// match, and the key of what it holds.
+    pub fn static_slot(
+        &mut self,
+        gl: &glow::Context,
+        at: (usize, usize),
+        key: MapKey,
+    ) -> Result<(glow::Texture, Option<u64>), String> {
+        slot_in(&mut self.statics, gl, at, key)
+    }
+
+    /// Records what the static map of view `at` now holds.
+    pub fn set_static_content(&mut self, at: (usize, usize), content: Option<u64>) {
+        if let Some(s) = self.statics.get_mut(&at) {
+            s.content = content;
         }
-        let texture = allocate(gl, key)?;
-        self.slots.insert(
-            (light, view),
-            Slot {
-                texture,
-                key,
-                content: None,
-            },
-        );
-        Ok((texture, None))
+    }
+
+    /// Deletes the static maps of `lights`' views not in `used`: those views are drawn whole
+    /// now (no model in them, or the light moves), and keeping a static map per view any
+    /// model ever crossed would hold up to twice the maps' memory.
+    pub fn release_statics(
+        &mut self,
+        gl: &glow::Context,
+        lights: &[usize],
+        used: &[(usize, usize)],
+    ) {
+        self.statics.retain(|at, s| {
+            let keep = !lights.contains(&at.0) || used.contains(at);
+            if !keep {
+                // SAFETY: our texture; this frame reads no static map it does not use.
+                unsafe { gl.delete_texture(s.texture) };
+            }
+            keep
+        });
+    }
+
+    /// Copies the static map of `at` into `texture` (one face of each where `cube_face`),
+    /// both of `size`² and the same format: a depth blit between two framebuffers (GL 3.0,
+    /// ES 3.0), NEAREST, as depth blits must be.
+    pub fn copy_static(
+        &mut self,
+        gl: &glow::Context,
+        at: (usize, usize),
+        texture: glow::Texture,
+        cube_face: Option<usize>,
+        size: u32,
+    ) -> Result<(), String> {
+        let source = self
+            .statics
+            .get(&at)
+            .ok_or("no static map to copy")?
+            .texture;
+        let draw = self.fbo(gl)?;
+        let read = match self.read_fbo {
+            Some(f) => f,
+            // SAFETY: creating a framebuffer object.
+            None => *self.read_fbo.insert(unsafe { gl.create_framebuffer()? }),
+        };
+        let image = super::passes::shadow_map::image_target(cube_face);
+        let s = size as i32;
+        // SAFETY: two framebuffers of our own, each with one of our depth textures; both are
+        // detached and unbound afterwards. A blit writes only where the scissor lets it.
+        unsafe {
+            gl.disable(glow::SCISSOR_TEST);
+            gl.depth_mask(true);
+            for (target, fbo, t) in [
+                (glow::READ_FRAMEBUFFER, read, source),
+                (glow::DRAW_FRAMEBUFFER, draw, texture),
+            ] {
+                gl.bind_framebuffer(target, Some(fbo));
+                gl.framebuffer_texture_2d(target, glow::DEPTH_ATTACHMENT, image, Some(t), 0);
+            }
+            gl.read_buffer(glow::NONE);
+            gl.draw_buffers(&[glow::NONE]);
+            gl.blit_framebuffer(
+                0,
+                0,
+                s,
+                s,
+                0,
+                0,
+                s,
+                s,
+                glow::DEPTH_BUFFER_BIT,
+                glow::NEAREST,
+            );
+            for target in [glow::READ_FRAMEBUFFER, glow::DRAW_FRAMEBUFFER] {
+                gl.framebuffer_texture_2d(target, glow::DEPTH_ATTACHMENT, image, None, 0);
+                gl.bind_framebuffer(target, None);
+            }
+        }
+        Ok(())
     }
 
     /// The ID buffer's colour texture of `light`'s view `view`, and whether it was just made
@@ -183,19 +313,8 @@ impl ShadowMaps {
         if kinds.is_empty() {
             return;
         }
-        self.slots.retain(|_, s| {
-            let keep = kinds.iter().any(|k| {
-                MapKey {
-                    cube: s.key.cube,
-                    ..*k
-                } == s.key
-            });
-            if !keep {
-                // SAFETY: our texture; no view of this frame reads it.
-                unsafe { gl.delete_texture(s.texture) };
-            }
-            keep
-        });
+        release_in(&mut self.slots, gl, kinds);
+        release_in(&mut self.statics, gl, kinds);
         let slots = &self.slots;
         self.ids.retain(|at, (t, size)| {
             let keep = slots
@@ -218,7 +337,7 @@ impl ShadowMaps {
 
     /// Forgets every map's contents (a new scene).
     pub fn forget(&mut self) {
-        for s in self.slots.values_mut() {
+        for s in self.slots.values_mut().chain(self.statics.values_mut()) {
             s.content = None;
         }
     }
@@ -271,19 +390,22 @@ impl ShadowMaps {
     }
 
     pub fn texture_count(&self) -> usize {
-        self.slots.len() + self.ids.len()
+        self.slots.len() + self.statics.len() + self.ids.len()
     }
 
     pub fn delete(&mut self, gl: &glow::Context) {
         // SAFETY: called once by the owner.
         unsafe {
-            for (_, s) in self.slots.drain() {
+            for (_, s) in self.slots.drain().chain(self.statics.drain()) {
                 gl.delete_texture(s.texture);
             }
             for (_, (t, _)) in self.ids.drain() {
                 gl.delete_texture(t);
             }
-            if let Some(f) = self.fbo.take() {
+            for f in [self.fbo.take(), self.read_fbo.take()]
+                .into_iter()
+                .flatten()
+            {
                 gl.delete_framebuffer(f);
             }
         }

@@ -352,6 +352,17 @@ pub(crate) fn buffer_data<T: Plain>(gl: &glow::Context, target: u32, data: &[T],
     unsafe { gl.buffer_data_u8_slice(target, bytes_of(data), usage) }
 }
 
+/// Writes `data` into the bound buffer from byte `offset` on (the buffer is large enough).
+pub(crate) fn buffer_sub_data<T: Plain>(
+    gl: &glow::Context,
+    target: u32,
+    offset: usize,
+    data: &[T],
+) {
+    // SAFETY: a plain upload into the bound buffer, within the size it was allocated with.
+    unsafe { gl.buffer_sub_data_u8_slice(target, offset as i32, bytes_of(data)) }
+}
+
 /// A vertex array with its vertex buffer and index buffer: one light's volumes (`gl::volumes`),
 /// one caster group's extrusion mesh (`gl::extrusion`).
 pub(crate) struct Buffers {

@@ -2,7 +2,7 @@
 //! [`LightVolumeDraws`](crate::plan::volume_draws::LightVolumeDraws) say what to upload and
 //! what to draw; this module holds the buffers and uploads.
 
-use super::upload::{Buffers, buffer_data};
+use super::upload::{Buffers, buffer_data, buffer_sub_data};
 use crate::plan::volume_draws::{LightVolumeDraws, PartRange, VolumeDraw};
 use glow::HasContext;
 use std::collections::HashMap;
@@ -41,14 +41,26 @@ impl VolumeBuffers {
             std::collections::hash_map::Entry::Occupied(e) => e.into_mut(),
             std::collections::hash_map::Entry::Vacant(e) => e.insert(Buffers::new(gl)?),
         };
-        if let Some(vertices) = &draws.upload.vertices {
-            // SAFETY: uploads plain f32 vertices; attribute 0 is a vec4 position.
+        let up = &draws.upload;
+        if let Some(vertices) = &up.vertices {
+            let vertex_bytes = std::mem::size_of::<[f32; 4]>();
+            // SAFETY: uploads plain f32 vertices; attribute 0 is a vec4 position. The planner
+            // allocates before writing past what the buffer holds (`VolumeUpload::allocate`).
             unsafe {
                 gl.bind_vertex_array(Some(b.vao));
                 gl.bind_buffer(glow::ARRAY_BUFFER, Some(b.vbo));
-                buffer_data(gl, glow::ARRAY_BUFFER, vertices, glow::DYNAMIC_DRAW);
-                gl.enable_vertex_attrib_array(0);
-                gl.vertex_attrib_pointer_f32(0, 4, glow::FLOAT, false, 16, 0);
+                if let Some(n) = up.allocate {
+                    gl.buffer_data_size(
+                        glow::ARRAY_BUFFER,
+                        (n * vertex_bytes) as i32,
+                        glow::DYNAMIC_DRAW,
+                    );
+                    gl.enable_vertex_attrib_array(0);
+                    gl.vertex_attrib_pointer_f32(0, 4, glow::FLOAT, false, 16, 0);
+                }
+                if !vertices.is_empty() {
+                    buffer_sub_data(gl, glow::ARRAY_BUFFER, up.at * vertex_bytes, vertices);
+                }
                 gl.bind_vertex_array(None);
                 gl.bind_buffer(glow::ARRAY_BUFFER, None);
             }

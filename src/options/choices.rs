@@ -389,8 +389,15 @@ option_enum! {
     /// Whose shadow volumes a vertex shader extrudes from a mesh built once per caster and pose
     /// (`shaders/volume_gpu.vert`), instead of the CPU building them per light.
     pub enum GpuExtrusion {
+        /// `moving` under `plan.profile = gpu`, `none` under `software` (on llvmpipe the
+        /// vertex shader runs on the CPU too, and the CPU's pieces are culled and cached:
+        /// docs/motion.md).
+        Auto = "auto",
         /// None: every volume is built on the CPU (the paper's frame).
         None = "none",
+        /// What the CPU would build again every frame: models', and every caster's under a
+        /// light that moves (an orbit or a route in the scene's motion).
+        Moving = "moving",
         /// Models' (players and other MD3s): an animated model's volumes would be built anew on
         /// the CPU for every frame and light; the world's stay on the CPU, cached.
         Models = "models",

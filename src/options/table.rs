@@ -245,6 +245,12 @@ define_options! {
         /// the camera, the depth read back, the volume options, the light and the casters'
         /// transforms. A still camera over a still scene then redoes none of the piece work.
         reuse_volume_draws: bool = true;
+        /// Build a still light's shadow-volume pieces of still casters (the world, models as
+        /// they were last frame) against every receiver in its range, not only those in view,
+        /// with both caps, and keep them while out of view (`shadow_volume.kept_mb`): neither
+        /// the camera nor the counting rebuilds them; a moving model counts as the box its
+        /// motion keeps it in. Off: built against the receivers in view, as the camera moves.
+        keep_volumes: bool = true;
         /// Leave out of each depth-clipped part's stencil draw the triangles one of its clip
         /// planes rejects wholly (tested on the CPU, a block of triangles at a time where its
         /// box decides, the rest drawn through an index list): the GL would clip them away,
@@ -515,13 +521,18 @@ define_options! {
         shading: VolumeShading = VolumeShading::Additive;
         /// Rebuild a light's volumes only when the light or a caster moved.
         caching: bool = true;
+        /// Memory for kept volume parts, in MiB (each held on the CPU and in the GPU's
+        /// buffer): a still light's pieces of still casters are built once against every
+        /// receiver in its range and kept while out of view; beyond this the least recently
+        /// planned are dropped.
+        kept_mb: f32 = 256.0, in 0.0 ..= 65536.0;
         /// Whose volumes the GPU extrudes (with infinite extrusion and the shader pipeline;
         /// elsewhere the CPU builds them all). Those volumes are whole caster groups, counted
         /// depth-fail, without the planner's per-piece culling, truncation, scissors or depth
         /// clips. Default none: on llvmpipe, where the vertex shader runs on the CPU too, the
         /// CPU's culled, cached pieces were faster for models and the world alike along every
         /// flythrough measured (docs/motion.md).
-        gpu_extrusion: GpuExtrusion = GpuExtrusion::None;
+        gpu_extrusion: GpuExtrusion = GpuExtrusion::Auto;
     }
 
     /// Vector's light-volume subdivision (`technique = subdivision`).

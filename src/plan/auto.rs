@@ -110,6 +110,17 @@ pub struct AutoMemory {
 }
 
 /// The option group a candidate's error depends on, as text.
+/// The volume options an error is measured under, less where the volumes are built and how
+/// many are kept (`gpu_extrusion`, `kept_mb`): those change no more than tie pixels at a
+/// volume's edge, and `plan.profile` resolves `gpu_extrusion = auto` inside the frame, after
+/// the caller who records the error chose its options.
+fn volume_options(options: &Options) -> crate::options::ShadowVolumeOptions {
+    let mut o = options.shadow_volume.clone();
+    o.gpu_extrusion = crate::options::GpuExtrusion::Auto;
+    o.kept_mb = 0.0;
+    o
+}
+
 fn technique_options(candidate: Candidate, options: &Options) -> String {
     match candidate.technique {
         Technique::ShadowMap => {
@@ -117,13 +128,15 @@ fn technique_options(candidate: Candidate, options: &Options) -> String {
             maps.buffer = candidate.buffer;
             serde_json::to_string(&maps)
         }
-        Technique::ShadowVolume => serde_json::to_string(&options.shadow_volume),
+        Technique::ShadowVolume => serde_json::to_string(&volume_options(options)),
         Technique::Psm | Technique::Tsm => {
             serde_json::to_string(&(&options.shadow_map, &options.psm))
         }
-        Technique::Hybrid => {
-            serde_json::to_string(&(&options.shadow_map, &options.shadow_volume, &options.hybrid))
-        }
+        Technique::Hybrid => serde_json::to_string(&(
+            &options.shadow_map,
+            &volume_options(options),
+            &options.hybrid,
+        )),
         // The subdivision is exact: no option changes its error.
         Technique::Subdivision | Technique::None | Technique::Auto => Ok(String::new()),
     }

@@ -152,6 +152,13 @@ pub struct LightPlan {
     pub view_casters: Vec<Vec<u32>>,
     /// Per shadow-map view, what its map depends on; a map drawn with the same key is reused.
     pub view_keys: Vec<Option<u64>>,
+    /// Per shadow-map view, the casters of each image it draws: one for a 2D map, a cube's
+    /// six faces each with those in its frustum.
+    pub view_images: Vec<Vec<ImageCasters>>,
+    /// Per shadow-map view made from a static map (its casters that do not move, kept and
+    /// copied into the map, the moving ones drawn over the copy), what the static map depends
+    /// on; None: the map is drawn whole.
+    pub view_static_keys: Vec<Option<u64>>,
     /// Where the light's stencil and lit passes may draw (None: the whole frame).
     pub scissor: Option<Scissor>,
     /// Per shadow-map view, where its lit pass may draw (an omni light's six spots: the face's
@@ -173,6 +180,15 @@ pub struct LightPlan {
     pub near_plane_triangles: Vec<Vec<u32>>,
     /// How the technique was chosen (`auto`, or why the light needs no shadow work).
     pub reason: String,
+}
+
+/// The casters one image of a shadow map draws (a 2D map, or one face of a cube).
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct ImageCasters {
+    /// Drawn into the view's static map where it has one, else into the map: every caster.
+    pub base: Vec<u32>,
+    /// Drawn over the copy of the static map: the moving models (empty without a static map).
+    pub moving: Vec<u32>,
 }
 
 impl LightPlan {

@@ -251,6 +251,7 @@ impl Planner {
             cull_clipped: p.enabled && p.cull_clipped,
             reuse_fits: p.reuse_depth_fits,
             reuse_draws: p.enabled && p.reuse_volume_draws,
+            keep: p.enabled && p.keep_volumes,
             depth_generation: self.depth.generation,
             truncate: p.enabled && p.truncate_volumes,
         };

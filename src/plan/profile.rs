@@ -8,10 +8,12 @@
 //! | `plan.occlusion` (depth read after the base pass) | on | off | the read-back stalls a GPU |
 //! | `plan.depth_clip` (clip planes fitted to that depth) | on | off | needs the same read-back |
 //! | `plan.depth_bounds_test` | on | on | the GL's own test reads no depth back |
+//! | `plan.keep_volumes` (still lights' pieces built against their range, kept) | off | on | longer, unmerged volumes: more fill, less CPU (docs/motion.md) |
+//! | `shadow_volume.gpu_extrusion = auto` | `none` | `moving` | a vertex shader on llvmpipe runs on the CPU too |
 //!
 //! Every other decision costs CPU work only and is the same under both.
 
-use crate::options::{Options, Profile};
+use crate::options::{GpuExtrusion, Options, Profile};
 
 /// The profile `auto` stands for on this GL: `software` where the renderer is a CPU rasteriser.
 pub fn effective(profile: Profile, software_renderer: bool) -> Profile {
@@ -26,9 +28,19 @@ pub fn effective(profile: Profile, software_renderer: bool) -> Profile {
 /// profile it stood for (never `auto`).
 pub fn resolve(mut o: Options, software_renderer: bool) -> Options {
     o.plan.profile = effective(o.plan.profile, software_renderer);
-    if o.plan.profile == Profile::Gpu {
+    let gpu = o.plan.profile == Profile::Gpu;
+    if gpu {
         o.plan.occlusion = false;
         o.plan.depth_clip = false;
+    } else {
+        o.plan.keep_volumes = false;
+    }
+    if o.shadow_volume.gpu_extrusion == GpuExtrusion::Auto {
+        o.shadow_volume.gpu_extrusion = if gpu {
+            GpuExtrusion::Moving
+        } else {
+            GpuExtrusion::None
+        };
     }
     o
 }
@@ -42,10 +54,13 @@ mod tests {
         let o = Options::default();
         let soft = resolve(o.clone(), true);
         assert_eq!(soft.plan.profile, Profile::Software);
-        assert!(soft.plan.occlusion && soft.plan.depth_clip);
+        assert!(soft.plan.occlusion && soft.plan.depth_clip && !soft.plan.keep_volumes);
+        assert_eq!(soft.shadow_volume.gpu_extrusion, GpuExtrusion::None);
         let gpu = resolve(o.clone(), false);
         assert_eq!(gpu.plan.profile, Profile::Gpu);
         assert!(!gpu.plan.occlusion && !gpu.plan.depth_clip && gpu.plan.depth_bounds_test);
+        assert!(gpu.plan.keep_volumes);
+        assert_eq!(gpu.shadow_volume.gpu_extrusion, GpuExtrusion::Moving);
         let mut forced = o.clone();
         forced.plan.profile = Profile::Gpu;
         assert!(!resolve(forced.clone(), true).plan.occlusion);

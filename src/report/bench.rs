@@ -191,6 +191,17 @@ fn stats(v: &[f64]) -> MsStats {
     }
 }
 
+/// Each frame's time over the shadows-off frame at the same path frame (`off_ms[i]` beside
+/// `frame_ms[i]`, both indexed by path frame); a frame without a positive baseline counts 0.
+fn frame_ratios(frame_ms: &[f64], off_ms: &[f64]) -> Vec<f64> {
+    debug_assert_eq!(frame_ms.len(), off_ms.len());
+    frame_ms
+        .iter()
+        .zip(off_ms)
+        .map(|(ms, off)| if *off > 0.0 { ms / off } else { 0.0 })
+        .collect()
+}
+
 /// Error against the exact reference, as fractions of receiver pixels.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Serialize)]
 pub struct ErrorRow {
@@ -238,11 +249,25 @@ pub struct BenchRow {
     pub frame_ms: MsStats,
     /// Median from the call to its return: the CPU's part of the frame.
     pub submit_ms: Median,
+    /// The same per-frame times as `submit_ms` (the call's wall time: resolving the options,
+    /// planning, building, uploads and submission, and the frame's own waits for the GPU
+    /// where `syncs_per_frame` counts any), with their spread and tail.
+    pub cpu_ms: MsStats,
+    /// Our own CPU work per frame outside GL calls (options, planning, volume pieces and
+    /// builds, GPU extrusion meshes: `Frame::own_ms`), with its spread and tail: what bounds
+    /// the frame rate on a GPU however fast it draws.
+    pub own_ms: MsStats,
     /// Milliseconds per frame with up to two frames in flight (throughput): the path drawn
     /// again back to back, bench waiting only for the frame before the one just sent.
     pub pipelined_ms: f64,
     pub shadows_off_frame_ms: Median,
+    /// The median frame over the shadows-off median frame.
     pub ratio_to_shadows_off: f64,
+    /// Frame by frame: each measured frame's latency over the shadows-off frame at the same
+    /// path frame ([`frame_ratios`]), the median and 99th percentile (nearest rank) of those
+    /// ratios (exactly 1 for a configuration without shadows, its own baseline).
+    pub ratio_median: f64,
+    pub ratio_p99: f64,
     /// Median milliseconds of each pass over the measured frames; `lights.<stage>` sums a stage
     /// over all lights of a frame.
     pub pass_ms: BTreeMap<String, f64>,
@@ -369,6 +394,8 @@ struct Measured {
     frame_ms: Vec<f64>,
     /// From the call to its return (planning, uploads, submission).
     submit_ms: Vec<f64>,
+    /// Our own CPU work outside GL calls.
+    own_ms: Vec<f64>,
     /// Milliseconds per frame with up to two frames in flight (0 where not measured).
     pipelined_ms: f64,
     /// What each timed frame redid and reused, summed.
@@ -415,6 +442,10 @@ pub struct Redone {
     /// Shadow maps drawn (a light, its view or a caster in it moved) and reused.
     pub maps_rendered: f64,
     pub maps_reused: f64,
+    /// Of those drawn: kept static maps drawn again, and maps made from a kept static map
+    /// with only the moving models drawn over it.
+    pub maps_static_drawn: f64,
+    pub maps_models_only: f64,
     /// Volume parts built (the light, a caster, the counting or the receivers their shadow
     /// reaches changed) and reused.
     pub volume_parts_built: f64,
@@ -439,6 +470,8 @@ impl Redone {
         self.frames += 1;
         self.maps_rendered += c.maps_rendered as f64;
         self.maps_reused += c.maps_reused as f64;
+        self.maps_static_drawn += c.maps_static_drawn as f64;
+        self.maps_models_only += c.maps_models_only as f64;
         self.volume_parts_built += c.volume_parts_built as f64;
         self.volume_parts_reused += c.volume_parts_reused as f64;
         self.caster_groups_built += c.caster_groups_built as f64;
@@ -455,6 +488,8 @@ impl Redone {
         for v in [
             &mut self.maps_rendered,
             &mut self.maps_reused,
+            &mut self.maps_static_drawn,
+            &mut self.maps_models_only,
             &mut self.volume_parts_built,
             &mut self.volume_parts_reused,
             &mut self.caster_groups_built,
@@ -481,6 +516,7 @@ struct Timed {
     ms: f64,
     /// From the call to its return.
     submit_ms: f64,
+    own_ms: f64,
     cache: CacheStats,
     syncs: Syncs,
 }
@@ -516,6 +552,7 @@ fn time_frame(
     Ok(Timed {
         ms: start.elapsed().as_secs_f64() * 1e3,
         submit_ms: f.frame_ms,
+        own_ms: f.own_ms,
         cache: f.cache,
         syncs: f.syncs,
     })
@@ -566,6 +603,7 @@ fn pass_breakdown(
     let mut m = Measured {
         frame_ms: timed.iter().map(|t| t.ms).collect(),
         submit_ms: timed.iter().map(|t| t.submit_ms).collect(),
+        own_ms: timed.iter().map(|t| t.own_ms).collect(),
         pipelined_ms: pipelined_ms(renderer, scene, settings, options)?,
         redone: redone.per_frame(),
         syncs: SyncsPerFrame::mean(&syncs),
@@ -602,7 +640,8 @@ pub struct Bench<'a> {
     settings: BenchSettings,
     /// Exact masks of the path's first view, by frame size and light.
     exact: ExactMasks,
-    baselines: HashMap<String, f64>,
+    /// Shadows-off frame times by path frame, measured once per distinct options.
+    baselines: HashMap<String, Vec<f64>>,
     /// The reference of a moving scene's current pose, by its models' poses and transforms.
     posed_reference: Option<(ModelsKey, Reference)>,
 }
@@ -726,16 +765,47 @@ impl<'a> Bench<'a> {
         options_key(&Self::shadows_off(options))
     }
 
-    /// Median frame time of `options` with shadows off, measured once per distinct options.
-    fn baseline(&mut self, options: &Options) -> Result<f64, RenderError> {
+    /// Frame times of `options` with shadows off, by path frame, measured once per distinct
+    /// options.
+    fn baseline(&mut self, options: &Options) -> Result<Vec<f64>, RenderError> {
         let key = Self::baseline_key(options);
-        if let Some(&ms) = self.baselines.get(&key) {
-            return Ok(ms);
+        if let Some(ms) = self.baselines.get(&key) {
+            return Ok(ms.clone());
         }
         let off = Self::shadows_off(options);
-        let ms = median(&mut self.measure(&off)?.frame_ms);
-        self.baselines.insert(key, ms);
+        let ms = self.measure(&off)?.frame_ms;
+        self.baselines.insert(key, ms.clone());
         Ok(ms)
+    }
+
+    /// A configuration's timed frames, and its shadows-off frames' times by path frame: from
+    /// the round-robin timing, or measured now. A configuration without shadows is its own
+    /// baseline.
+    fn timed(
+        &mut self,
+        c: &BenchConfig,
+        interleaved: &HashMap<String, Measured>,
+    ) -> Result<(Vec<f64>, Measured), RenderError> {
+        let own = c.options.technique == Technique::None;
+        if self.settings.interleave {
+            let m = interleaved[&options_key(&c.options)].clone();
+            let off = if own {
+                m.frame_ms.clone()
+            } else {
+                interleaved[&Self::baseline_key(&c.options)]
+                    .frame_ms
+                    .clone()
+            };
+            Ok((off, m))
+        } else if own {
+            let m = self.measure(&c.options)?;
+            let key = Self::baseline_key(&c.options);
+            self.baselines.insert(key, m.frame_ms.clone());
+            Ok((m.frame_ms.clone(), m))
+        } else {
+            let off = self.baseline(&c.options)?;
+            Ok((off, self.measure(&c.options)?))
+        }
     }
 
     /// The first frame of the path with `options`, compared with the exact reference.
@@ -847,27 +917,12 @@ impl<'a> Bench<'a> {
         } else {
             HashMap::new()
         };
-        let timed = |o: &Options| -> Measured { interleaved[&options_key(o)].clone() };
         for c in configs {
             bar.set_message(c.label());
-            // A configuration without shadows is its own baseline.
-            let (off_ms, m) = if self.settings.interleave {
-                let m = timed(&c.options);
-                let off = if c.options.technique == Technique::None {
-                    m.frame_ms.clone()
-                } else {
-                    timed(&Self::shadows_off(&c.options)).frame_ms
-                };
-                (median(&mut off.clone()), m)
-            } else if c.options.technique == Technique::None {
-                let m = self.measure(&c.options)?;
-                let ms = median(&mut m.frame_ms.clone());
-                self.baselines.insert(Self::baseline_key(&c.options), ms);
-                (ms, m)
-            } else {
-                let off = self.baseline(&c.options)?;
-                (off, self.measure(&c.options)?)
-            };
+            let (off, m) = self.timed(c, &interleaved)?;
+            let off_ms = median(&mut off.clone());
+            let ratios = stats(&frame_ratios(&m.frame_ms, &off));
+            let cpu_ms = stats(&m.submit_ms);
             let FrameError {
                 total,
                 per_light,
@@ -903,8 +958,10 @@ impl<'a> Bench<'a> {
                 frames: m.frame_ms.len(),
                 frame_ms,
                 submit_ms: Median {
-                    median: median(&mut m.submit_ms.clone()),
+                    median: cpu_ms.median,
                 },
+                cpu_ms,
+                own_ms: stats(&m.own_ms),
                 pipelined_ms: m.pipelined_ms,
                 shadows_off_frame_ms: Median { median: off_ms },
                 ratio_to_shadows_off: if off_ms > 0.0 {
@@ -912,6 +969,8 @@ impl<'a> Bench<'a> {
                 } else {
                     0.0
                 },
+                ratio_median: ratios.median,
+                ratio_p99: ratios.p99,
                 pass_ms: m
                     .passes
                     .into_iter()
@@ -962,9 +1021,13 @@ pub(crate) fn test_row(technique: &str, label: &str, ms: f64, error: f64) -> Ben
             p99: ms,
         },
         submit_ms: Median { median: ms },
+        cpu_ms: MsStats::default(),
+        own_ms: MsStats::default(),
         pipelined_ms: ms,
         shadows_off_frame_ms: Median { median: 1.0 },
         ratio_to_shadows_off: ms,
+        ratio_median: ms,
+        ratio_p99: ms,
         pass_ms: BTreeMap::new(),
         clock: "cpu".into(),
         error: ErrorRow {
@@ -1018,5 +1081,25 @@ mod tests {
         let h = stats(&hundred);
         assert_eq!((h.p95, h.p99, h.max), (95.0, 99.0, 100.0));
         assert_eq!(stats(&[7.0]).p99, 7.0);
+    }
+
+    /// Ratios are taken path frame by path frame, not median over median: frames of 40, 3, 9,
+    /// 16 and 100 ms over shadows-off frames of 40, 1.5, 3, 4 and 1 ms are 1, 2, 3, 4 and 100
+    /// times theirs, whose median is 3 and 99th percentile (nearest rank: the 5th of 5) 100,
+    /// where the medians' ratio is 16 / 3 and the 99th percentiles' 100 / 40.
+    #[test]
+    fn ratios_to_shadows_off_are_taken_frame_by_frame() {
+        let ratios = frame_ratios(&[40.0, 3.0, 9.0, 16.0, 100.0], &[40.0, 1.5, 3.0, 4.0, 1.0]);
+        assert_eq!(ratios, [1.0, 2.0, 3.0, 4.0, 100.0]);
+        let s = stats(&ratios);
+        assert_eq!((s.median, s.p99), (3.0, 100.0));
+        // Shuffled together (the same pairs), the same ratios.
+        let shuffled = frame_ratios(&[16.0, 100.0, 40.0, 9.0, 3.0], &[4.0, 1.0, 40.0, 3.0, 1.5]);
+        assert_eq!(stats(&shuffled), s);
+        // A configuration over itself (shadows off is its own baseline): exactly 1 each.
+        let own = [13.7, 0.3, 41.0];
+        assert!(frame_ratios(&own, &own).iter().all(|r| *r == 1.0));
+        // No positive baseline: 0, not infinity.
+        assert_eq!(frame_ratios(&[2.0], &[0.0]), [0.0]);
     }
 }

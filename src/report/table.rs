@@ -111,7 +111,8 @@ fn stage_names(rows: &[BenchRow]) -> Vec<String> {
     names
 }
 
-/// One line per configuration: frame time, ratio to shadows off, error, and per-stage medians.
+/// One line per configuration: frame time, its CPU part, ratios to shadows off (of the medians,
+/// and frame by frame), error, and per-stage medians.
 pub fn bench_table(rows: &[BenchRow]) -> Table {
     let stages = stage_names(rows);
     let mut header = vec![
@@ -119,14 +120,19 @@ pub fn bench_table(rows: &[BenchRow]) -> Table {
         ("configuration".to_string(), Align::Left),
         ("lights".to_string(), Align::Right),
         ("frame ms (median)".to_string(), Align::Right),
-        ("CPU ms".to_string(), Align::Right),
+        ("CPU ms median".to_string(), Align::Right),
+        ("CPU ms p99".to_string(), Align::Right),
+        ("own CPU ms median, p99".to_string(), Align::Right),
         ("ms, 2 in flight".to_string(), Align::Right),
         ("waits per frame".to_string(), Align::Right),
         ("p95, p99 ms".to_string(), Align::Right),
         ("p99 / median".to_string(), Align::Right),
         ("× shadows off".to_string(), Align::Right),
+        ("× off median".to_string(), Align::Right),
+        ("× off p99".to_string(), Align::Right),
         (
-            "redone per frame (maps, volume parts, caster groups)".to_string(),
+            "redone per frame (maps, of which models only, volume parts, caster groups)"
+                .to_string(),
             Align::Right,
         ),
         ("error %".to_string(), Align::Right),
@@ -151,15 +157,22 @@ pub fn bench_table(rows: &[BenchRow]) -> Table {
             r.label.clone(),
             r.lights.to_string(),
             format!("{:.2}", r.frame_ms.median),
-            format!("{:.2}", r.submit_ms.median),
+            format!("{:.2}", r.cpu_ms.median),
+            format!("{:.2}", r.cpu_ms.p99),
+            format!("{:.2}, {:.2}", r.own_ms.median, r.own_ms.p99),
             format!("{:.2}", r.pipelined_ms),
             format!("{:.1}", r.syncs_per_frame.total),
             format!("{:.2}, {:.2}", r.frame_ms.p95, r.frame_ms.p99),
             format!("{:.2}", r.frame_ms.p99_over_median()),
             format!("{:.2}", r.ratio_to_shadows_off),
+            format!("{:.2}", r.ratio_median),
+            format!("{:.2}", r.ratio_p99),
             format!(
-                "{:.1}, {:.1}, {:.1}",
-                r.redone.maps_rendered, r.redone.volume_parts_built, r.redone.caster_groups_built
+                "{:.1}, {:.1}, {:.1}, {:.1}",
+                r.redone.maps_rendered,
+                r.redone.maps_models_only,
+                r.redone.volume_parts_built,
+                r.redone.caster_groups_built
             ),
             format!("{:.3}", 100.0 * r.error.total),
             format!("{:.3}", 100.0 * r.error.total_excl_boundary),

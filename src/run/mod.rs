@@ -53,7 +53,7 @@ macro_rules! or_stopped {
     ($flow:expr) => {
         match $flow? {
             ControlFlow::Continue(v) => v,
-            ControlFlow::Break(frame) => return Ok(frame),
+            ControlFlow::Break(frame) => return Ok((frame, 0.0)),
         }
     };
 }
@@ -165,8 +165,11 @@ impl Renderer {
         }
         self.drawer.allow_timer_queries(caps.has("timer_query"));
         let plan = self.planner.plan(scene, camera, options);
+        let planned_ms = start.elapsed().as_secs_f64() * 1e3;
         self.check_support(&settings, &plan)?;
-        let mut frame = self.draw(scene, &plan, options, &settings, request, start)?;
+        let (mut frame, volumes_ms) =
+            self.draw(scene, &plan, options, &settings, request, start)?;
+        frame.own_ms += planned_ms + volumes_ms;
         frame.fallbacks = fallbacks;
         frame.cache.caster_groups_built = self.planner.take_groups_rebuilt();
         // Frame-only timing has no per-light passes to learn from.
@@ -186,7 +189,7 @@ impl Renderer {
         settings: &PassSettings,
         request: FrameRequest,
         start: Instant,
-    ) -> Result<Frame, RenderError> {
+    ) -> Result<(Frame, f64), RenderError> {
         let Renderer { drawer, planner } = self;
         let mut f = drawer.begin_frame(scene, plan, settings, request, start)?;
         // Shadow maps of every shadow-mapped light first (paper 3.1).
@@ -200,7 +203,7 @@ impl Renderer {
             DepthNeed::Reuse => f.depth_reused(),
             DepthNeed::None => {}
         }
-        volume_draws(&mut f, planner, (scene, plan, options))?;
+        let volumes_ms = volume_draws(&mut f, planner, (scene, plan, options))?;
         f.subdivisions()?;
         let draws = plan
             .lights
@@ -210,7 +213,7 @@ impl Renderer {
             .collect();
         f.use_volume_draws(draws);
         let stencil = or_stopped!(f.light_passes(&maps));
-        f.end(maps, stencil)
+        Ok((f.end(maps, stencil)?, volumes_ms))
     }
 
     /// The probed capabilities less the features `gl.disable` names.
@@ -298,20 +301,24 @@ impl Renderer {
 
 /// Each shadow-volume light's draws made by the planner and uploaded; the CPU's per-frame work
 /// on the pieces (receivers, rectangles, merges, depth clips) and the uploads timed as one
-/// stage, less the parts' builds, timed per light.
+/// stage, less the parts' builds, timed per light. Returns the planner's share (pieces and
+/// builds, outside GL calls).
 fn volume_draws(
     f: &mut FrameRun<'_>,
     planner: &mut Planner,
     (scene, plan, options): (&Scene, &Plan, &Options),
-) -> Result<(), RenderError> {
+) -> Result<f64, RenderError> {
     if !plan.any_volumes() {
-        return Ok(());
+        return Ok(0.0);
     }
     let start = Instant::now();
     let mut builds_ms = 0.0;
+    let mut planner_ms = 0.0;
     for lp in plan.lights.iter().filter(|l| l.counts_volumes()) {
+        let planning = Instant::now();
         let groups = (!lp.extruded.is_empty()).then(|| planner.casters(scene));
         let v = planner.volume_draws(scene, plan, lp, options)?;
+        planner_ms += planning.elapsed().as_secs_f64() * 1e3;
         match f.upload_volumes(lp, v, groups.as_deref()) {
             Ok(ms) => builds_ms += ms,
             Err(e) => {
@@ -322,5 +329,5 @@ fn volume_draws(
     }
     let ms = start.elapsed().as_secs_f64() * 1e3 - builds_ms;
     f.record_cpu(PassId::frame(Stage::VolumePieces), ms.max(0.0));
-    Ok(())
+    Ok(planner_ms)
 }

@@ -166,6 +166,10 @@ pub struct Surface {
     pub kind: SurfaceKind,
     /// World-space bounds (after the owner's transform).
     pub bounds: Aabb,
+    /// Two of its triangles cover some area twice (`geometry::overlap::covers_twice`, as
+    /// loaded): its lit pass marks the stencil to add a light once (`lighting.light_once`);
+    /// other surfaces are lit without stencil writes, which keeps the early depth test.
+    pub overlapping: bool,
 }
 
 /// A placed model: its surfaces are stored in model space and drawn with `transform`.
@@ -267,6 +271,9 @@ impl Scene {
             owner,
             kind,
             bounds: local.transformed(&transform),
+            overlapping: crate::geometry::overlap::covers_twice(&local_triangles(
+                vertices, indices,
+            )),
         });
         self.touch();
     }
@@ -374,4 +381,13 @@ impl Scene {
             .map(|s| s.index_count as usize / 3)
             .sum()
     }
+}
+
+/// The triangles of one surface's `indices` into its own `vertices`.
+fn local_triangles(vertices: &[Vertex], indices: &[u32]) -> Vec<[Vec3; 3]> {
+    indices
+        .chunks_exact(3)
+        .filter(|t| t.iter().all(|&i| (i as usize) < vertices.len()))
+        .map(|t| [0, 1, 2].map(|k| vertices[t[k] as usize].pos()))
+        .collect()
 }

@@ -165,6 +165,34 @@ pub struct PartPose {
 }
 
 impl Rig {
+    /// How far from the model's origin any vertex of any key frame can be: each part's
+    /// farthest vertex beyond the farthest origins of the tags it hangs on (tags turn, they
+    /// do not stretch).
+    pub fn radius(&self) -> f32 {
+        let mut offsets: Vec<f32> = Vec::with_capacity(self.parts.len());
+        let mut radius = 0.0f32;
+        for part in &self.parts {
+            let offset = match part.parent {
+                Some((p, tag)) if p < offsets.len() => {
+                    let farthest = self.parts[p].tags.get(tag).map_or(0.0, |(_, keys)| {
+                        keys.iter().map(|k| k.origin.length()).fold(0.0, f32::max)
+                    });
+                    offsets[p] + farthest
+                }
+                _ => 0.0,
+            };
+            offsets.push(offset);
+            let farthest = part
+                .meshes
+                .iter()
+                .flat_map(|m| m.positions.iter())
+                .map(|p| p.length())
+                .fold(0.0f32, f32::max);
+            radius = radius.max(offset + farthest);
+        }
+        radius
+    }
+
     /// Every part's transform and key frames at time `t`: a child's transform is its parent's
     /// times the parent's tag, mixed between the parent's key frames.
     pub fn part_poses(&self, t: f64) -> Vec<PartPose> {
@@ -375,6 +403,56 @@ pub struct Posed {
 }
 
 impl Motion {
+    /// Where model `model` may be while the motion plays: a world box holding it in every
+    /// pose (its walk's route grown by its reach about its origin, or that reach about where
+    /// it stands). None for a model the motion does not move. What is built against every
+    /// receiver a light reaches can take this box for the model and stay as built while it
+    /// moves.
+    pub fn reach(&self, scene: &Scene, model: usize) -> Option<crate::geometry::Aabb> {
+        let rig = self.rigs.iter().find(|r| r.model == model);
+        let walk = self.walks.iter().find(|w| w.model == model);
+        let m = scene.models.get(model)?;
+        if rig.is_none() && walk.is_none() {
+            return None;
+        }
+        let radius = match rig {
+            Some(r) => r.radius(),
+            None => scene
+                .surfaces
+                .iter()
+                .filter(|s| s.owner == super::SurfaceOwner::Model(model))
+                .flat_map(|s| {
+                    let run = s.first_index as usize..(s.first_index + s.index_count) as usize;
+                    scene.indices.get(run).unwrap_or(&[]).iter()
+                })
+                .filter_map(|&i| scene.vertices.get(i as usize))
+                .map(|v| v.pos().length())
+                .fold(0.0f32, f32::max),
+        };
+        // A walk turns the model about z (no scale); standing, its transform may scale it.
+        let (centres, scale) = match walk {
+            Some(w) if !w.route.points.is_empty() => (
+                crate::geometry::Aabb::from_points(w.route.points.iter().copied()),
+                1.0,
+            ),
+            _ => {
+                let origin = m.transform.transform_point3(Vec3::ZERO);
+                let t = m.transform;
+                let scale = [t.x_axis, t.y_axis, t.z_axis]
+                    .iter()
+                    .map(|a| a.truncate().length())
+                    .fold(0.0f32, f32::max);
+                (crate::geometry::Aabb::from_points([origin]), scale)
+            }
+        };
+        // A margin for tags mixed between key frames (unit axes, not quite orthogonal).
+        let r = radius * scale * 1.1 + 1.0;
+        Some(crate::geometry::Aabb {
+            min: centres.min - Vec3::splat(r),
+            max: centres.max + Vec3::splat(r),
+        })
+    }
+
     pub fn is_still(&self) -> bool {
         self.rigs.is_empty() && self.walks.is_empty() && self.lights.is_empty()
     }

@@ -515,3 +515,36 @@ impl Footprint {
         );
     }
 }
+
+/// `camera`'s frame of `scene` drawn with masks by `cached` and by `fresh` after it forgot
+/// everything (the scene loaded again), under their options; asserts every light's masks
+/// equal (`what` names the frame in the message) and returns the cached renderer's frame and
+/// how many masks were compared.
+pub fn cached_against_fresh(
+    (cached, fresh): (&mut Renderer, &mut Renderer),
+    (scene, camera): (&Scene, &shadowlab::scene::Camera),
+    (cached_options, fresh_options): (&Options, &Options),
+    what: &str,
+) -> (Frame, usize) {
+    let request = shadowlab::gl::FrameRequest {
+        masks: true,
+        ..Default::default()
+    };
+    let fa = cached
+        .render_at(scene, camera, cached_options, request)
+        .unwrap();
+    fresh.load_scene(scene).unwrap();
+    let fb = fresh
+        .render_at(scene, camera, fresh_options, request)
+        .unwrap();
+    for (ma, mb) in fa.masks.iter().zip(&fb.masks) {
+        assert_eq!(
+            differing(ma, mb),
+            0,
+            "{what}, light {}: masks differ",
+            ma.light
+        );
+    }
+    let compared = fa.masks.len().min(fb.masks.len());
+    (fa, compared)
+}

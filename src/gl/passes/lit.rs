@@ -339,6 +339,33 @@ pub fn finish(gl: &glow::Context) {
     }
 }
 
+/// Where a light's lit pass marks the stencil so that it adds to each pixel once
+/// (`lighting.light_once`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Marks {
+    /// Nowhere: the light is added wherever a fragment passes (the paper's additive passes).
+    Off,
+    /// On the surfaces whose own triangles overlap ([`crate::scene::Surface::overlapping`]),
+    /// drawn first; the others only test the marks, without writing, which keeps the early
+    /// depth test (llvmpipe drops it for a pass that writes stencil from a shader that may
+    /// discard: the marks everywhere doubled its lit passes).
+    Overlapping,
+    /// On every surface: the light has several lit passes (one per map view), whose receivers
+    /// may meet where the views do; the stencil is cleared once before the first.
+    Everywhere,
+}
+
+impl Marks {
+    /// The marks a light drawn in `lit_passes` lit passes needs.
+    pub fn of(light_once: bool, lit_passes: usize) -> Marks {
+        match (light_once, lit_passes > 1) {
+            (false, _) => Marks::Off,
+            (true, false) => Marks::Overlapping,
+            (true, true) => Marks::Everywhere,
+        }
+    }
+}
+
 /// Adds the light's contribution to `receivers` (the plan's surfaces for this light or view)
 /// where the depth equals the unlit pass's.
 pub fn draw(
@@ -346,7 +373,7 @@ pub fn draw(
     program: &Program,
     lp: &LightPlan,
     shadow: &LitShadow,
-    receivers: &[u32],
+    (receivers, marks): (&[u32], Marks),
 ) {
     let gl = ctx.gl;
     // Test against the unlit pass, never write depth; add the light.
@@ -355,16 +382,48 @@ pub fn draw(
         ..DrawState::OVER_DEPTH
     }
     .apply(gl);
-    lit_stencil(gl, shadow, ctx.settings.lighting.light_once);
     bind_light(ctx, program, lp, shadow);
-    draw_items(
-        ctx,
-        program,
-        &ctx.gpu
-            .draw_list_of(ctx.scene, crate::gl::upload::Merge::ByMaterial, receivers),
-        |_| {},
-    );
+    let draw_surfaces = |surfaces: &[u32]| {
+        let items = ctx
+            .gpu
+            .draw_list_of(ctx.scene, crate::gl::upload::Merge::ByMaterial, surfaces);
+        draw_items(ctx, program, &items, |_| {});
+    };
+    if marks != Marks::Overlapping {
+        lit_stencil(gl, shadow, marks == Marks::Everywhere);
+        draw_surfaces(receivers);
+        finish(gl);
+        return;
+    }
+    let (twice, once): (Vec<u32>, Vec<u32>) = receivers
+        .iter()
+        .partition(|&&s| ctx.scene.surfaces[s as usize].overlapping);
+    if !twice.is_empty() {
+        // Under volumes (and the hybrid) the stencil holds the counts the marks add to; the
+        // map and unshadowed passes start from a clear one.
+        if !matches!(shadow, LitShadow::Stencil { .. } | LitShadow::Hybrid(_)) {
+            clear_marks(gl);
+        }
+        lit_stencil(gl, shadow, true);
+        draw_surfaces(&twice);
+    }
+    lit_gate(gl, shadow, !twice.is_empty());
+    draw_surfaces(&once);
     finish(gl);
+}
+
+/// The lit pass's stencil state over surfaces that are not marked: as without marks, and
+/// where `marked` (surfaces drawn before marked the stencil), a test that no mark is there,
+/// which writes nothing.
+fn lit_gate(gl: &glow::Context, shadow: &LitShadow, marked: bool) {
+    match shadow {
+        LitShadow::Stencil { .. } | LitShadow::Hybrid(_) => lit_stencil(gl, shadow, false),
+        _ if marked => stencil_gate(gl, glow::EQUAL, 0xff),
+        _ => {
+            // SAFETY: fixed-function state.
+            unsafe { gl.disable(glow::STENCIL_TEST) };
+        }
+    }
 }
 
 /// Writes the light's decision into the bound mask target (cleared to "not a receiver"). Under

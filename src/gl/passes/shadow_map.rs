@@ -74,6 +74,8 @@ pub struct MapView<'a> {
     pub buffer: MapBuffer,
     pub table: Option<glow::Texture>,
     pub light_position: glam::Vec3,
+    /// Draw over what the map holds (a copy of its static map) instead of clearing it.
+    pub over: bool,
 }
 
 /// The smallest depth step of a map's format: glPolygonOffset's unit `r`.
@@ -121,7 +123,8 @@ pub fn render(ctx: &PassContext, program: &Program, view: &MapView, target: &Dep
     end(gl, view, target);
 }
 
-/// Binds `target` and sets the depth pass's state: viewport, depth only, cleared, the offset.
+/// Binds `target` and sets the depth pass's state: viewport, depth only, cleared (unless the
+/// view draws over the map), the offset.
 pub fn begin(ctx: &PassContext, view: &MapView, target: &DepthTarget) {
     let gl = ctx.gl;
     let o = &ctx.settings.shadow_map;
@@ -178,7 +181,9 @@ pub fn begin(ctx: &PassContext, view: &MapView, target: &DepthTarget) {
             gl.clear(glow::DEPTH_BUFFER_BIT | glow::COLOR_BUFFER_BIT);
         } else {
             gl.color_mask(false, false, false, false);
-            gl.clear(glow::DEPTH_BUFFER_BIT);
+            if !view.over {
+                gl.clear(glow::DEPTH_BUFFER_BIT);
+            }
         }
         gl.enable(glow::DEPTH_TEST);
         gl.depth_func(glow::LESS);

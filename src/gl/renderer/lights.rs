@@ -25,10 +25,13 @@ impl<'a> FrameRun<'a> {
             } else {
                 self.timer
                     .begin(self.ctx.gl, PassId::light(lp.light, Stage::Lit));
-                if self.ctx.settings.lighting.light_once {
+                let bindings = self.bindings(maps, pi);
+                // Marks on every surface are cleared once for all the light's passes (marks
+                // on overlapping surfaces alone are cleared by the pass that makes them).
+                let once = self.ctx.settings.lighting.light_once;
+                if Marks::of(once, lit_passes(lp, &bindings)) == Marks::Everywhere {
                     passes::lit::clear_marks(self.ctx.gl);
                 }
-                let bindings = self.bindings(maps, pi);
                 match self.fixed {
                     Some(ff) => fixed_maps(&self.ctx, ff, lp, &bindings, false),
                     None => draw_maps(
@@ -226,7 +229,10 @@ impl<'a> FrameRun<'a> {
                 self.lit_program(LitVariant::plain(false)),
                 lp,
                 &shadow,
-                &lp.receivers,
+                (
+                    &lp.receivers,
+                    Marks::of(self.ctx.settings.lighting.light_once, 1),
+                ),
             ),
         }
         self.step(StepKind::Lit, Some(lp), None, Self::color_image)

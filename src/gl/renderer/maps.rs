@@ -2,6 +2,7 @@
 //! passes that read them.
 
 use super::*;
+use crate::plan::ImageCasters;
 
 impl<'a> FrameRun<'a> {
     /// Every shadow-mapped light's views into their depth textures (drawn again only when
@@ -45,6 +46,22 @@ impl<'a> FrameRun<'a> {
             }
         }
         self.shadow_maps.release_unlike(gl, &kinds);
+        let lights: Vec<usize> = plan
+            .lights
+            .iter()
+            .filter(|lp| lp.technique.uses_maps())
+            .map(|lp| lp.light)
+            .collect();
+        let split: Vec<(usize, usize)> = plan
+            .lights
+            .iter()
+            .flat_map(|lp| {
+                let keys = lp.view_static_keys.iter().enumerate();
+                keys.filter(|(_, k)| k.is_some())
+                    .map(|(vi, _)| (lp.light, vi))
+            })
+            .collect();
+        self.shadow_maps.release_statics(gl, &lights, &split);
         Ok(ControlFlow::Continue(maps))
     }
 
@@ -95,22 +112,26 @@ impl<'a> FrameRun<'a> {
             holds = None;
         }
         let key = lp.view_keys.get(vi).copied().flatten();
-        let faces = if key.is_some() && holds == key {
-            self.cache.maps_reused += 1;
-            Vec::new()
-        } else {
-            self.cache.maps_rendered += 1;
-            view.face_view_projs(self.ctx.scene.lights[lp.light].position)
+        let drawn = key.is_none() || holds != key;
+        let buffers = MapBuffers {
+            depth: texture,
+            ids,
+            table,
+            buffer,
         };
-        let drawn = !faces.is_empty();
-        for (face, view_proj) in faces {
-            let buffers = MapBuffers {
-                depth: texture,
-                ids,
-                table,
-                buffer,
-            };
-            go_on!(self.map_face(lp, vi, (face, view_proj), fbo, buffers));
+        if drawn {
+            // What the texture held is gone, whether or not the frame stops before the end.
+            self.shadow_maps.set_content(lp.light, vi, None);
+            self.cache.maps_rendered += 1;
+            let faces = view.face_view_projs(self.ctx.scene.lights[lp.light].position);
+            match lp.view_static_keys.get(vi).copied().flatten() {
+                Some(static_key) => {
+                    go_on!(self.map_over_static((lp, vi), &faces, static_key, buffers, kind))
+                }
+                None => go_on!(self.map_base_faces((lp, vi), &faces, fbo, buffers)),
+            }
+        } else {
+            self.cache.maps_reused += 1;
         }
         if drawn && kind.levels > 1 {
             let mip_fbo = self.shadow_maps.fbo(gl).map_err(RenderError::Gl)?;
@@ -145,22 +166,101 @@ impl<'a> FrameRun<'a> {
         )))
     }
 
+    /// View `vi` of light `lp` made from its static map (the casters that do not move): the
+    /// static map drawn first where it does not hold `static_key`, then per image copied into
+    /// the map and the moving casters drawn over the copy, straight into the map (a depth
+    /// map is the nearest depth of its casters, whatever the order they are drawn in).
+    fn map_over_static(
+        &mut self,
+        (lp, vi): (&LightPlan, usize),
+        faces: &[(Option<usize>, glam::Mat4)],
+        static_key: u64,
+        buffers: MapBuffers,
+        kind: MapKey,
+    ) -> Flow<()> {
+        let gl = self.ctx.gl;
+        let at = (lp.light, vi);
+        let (kept, holds) = self
+            .shadow_maps
+            .static_slot(gl, at, kind)
+            .map_err(RenderError::Gl)?;
+        if holds == Some(static_key) {
+            self.cache.maps_models_only += 1;
+        } else {
+            self.shadow_maps.set_static_content(at, None);
+            self.cache.maps_static_drawn += 1;
+            let fbo = (!self.copy)
+                .then(|| self.shadow_maps.fbo(gl))
+                .transpose()
+                .map_err(RenderError::Gl)?;
+            let into_static = MapBuffers {
+                depth: kept,
+                ..buffers
+            };
+            go_on!(self.map_base_faces((lp, vi), faces, fbo, into_static));
+            self.shadow_maps.set_static_content(at, Some(static_key));
+        }
+        let size = lp.views[vi].map_size(self.ctx.settings.shadow_map.size);
+        let fbo = self.shadow_maps.fbo(gl).map_err(RenderError::Gl)?;
+        self.timer
+            .begin(gl, PassId::light(lp.light, Stage::ShadowMap));
+        for (i, &(face, view_proj)) in faces.iter().enumerate() {
+            self.shadow_maps
+                .copy_static(gl, at, buffers.depth, face, size)
+                .map_err(RenderError::Gl)?;
+            let moving = image_casters(lp, vi, i, |c| &c.moving).filter(|m| !m.is_empty());
+            if moving.is_some() {
+                let draw = FaceDraw {
+                    face,
+                    view_proj,
+                    casters: moving,
+                    over: true,
+                };
+                go_on!(self.map_face(lp, vi, draw, Some(fbo), buffers));
+            }
+        }
+        Ok(ControlFlow::Continue(()))
+    }
+
     /// One view (or cube face) of a light drawn into its map, and copied there from the frame
-    /// when maps are copies.
+    /// when maps are copies (never over a static map's copy, which is in the map already).
+    /// Every face of view `vi` drawn into `buffers` with the casters that do not move (all of
+    /// them where none does).
+    fn map_base_faces(
+        &mut self,
+        (lp, vi): (&LightPlan, usize),
+        faces: &[(Option<usize>, glam::Mat4)],
+        fbo: Option<glow::Framebuffer>,
+        buffers: MapBuffers,
+    ) -> Flow<()> {
+        for (i, &(face, view_proj)) in faces.iter().enumerate() {
+            let casters = image_casters(lp, vi, i, |c| &c.base);
+            let draw = FaceDraw {
+                face,
+                view_proj,
+                casters,
+                over: false,
+            };
+            go_on!(self.map_face(lp, vi, draw, fbo, buffers));
+        }
+        Ok(ControlFlow::Continue(()))
+    }
+
     pub(super) fn map_face(
         &mut self,
         lp: &LightPlan,
         vi: usize,
-        (face, view_proj): (Option<usize>, glam::Mat4),
+        draw: FaceDraw,
         fbo: Option<glow::Framebuffer>,
         buffers: MapBuffers,
     ) -> Flow<()> {
         let gl = self.ctx.gl;
         let size = lp.views[vi].map_size(self.ctx.settings.shadow_map.size);
+        let (face, view_proj) = (draw.face, draw.view_proj);
         let shown = face.or(Some(vi));
         let texture = buffers.depth;
         // ID buffers are drawn through the FBO: their IDs are colour, the frame's is not theirs.
-        let through_fbo = !self.copy || buffers.ids.is_some();
+        let through_fbo = !self.copy || buffers.ids.is_some() || draw.over;
         let target = match fbo {
             Some(fbo) if through_fbo => DepthTarget::Fbo {
                 fbo,
@@ -179,11 +279,12 @@ impl<'a> FrameRun<'a> {
             size,
             cube_face: face,
             offset: lp.map_offset,
-            casters: lp.view_casters.get(vi).map(Vec::as_slice),
+            casters: draw.casters,
             depth_view_proj: lp.views[vi].depth_view_proj,
             buffer: buffers.buffer,
             table: buffers.table,
             light_position: self.ctx.scene.lights[lp.light].position,
+            over: draw.over,
         };
         let depth_program = if view.depth_view_proj.is_some() {
             &self.programs.depth_warp
@@ -221,6 +322,30 @@ impl<'a> FrameRun<'a> {
             }));
         }
         Ok(ControlFlow::Continue(()))
+    }
+}
+
+/// One image of a view to draw: its cube face (None: a 2D map), matrix and casters (None:
+/// every caster), and whether it is drawn over the map's copy of its static map.
+#[derive(Clone, Copy)]
+pub(super) struct FaceDraw<'c> {
+    face: Option<usize>,
+    view_proj: glam::Mat4,
+    casters: Option<&'c [u32]>,
+    over: bool,
+}
+
+/// The casters `which` picks of image `i` of light `lp`'s view `vi`, or the view's casters
+/// where the plan lists no images.
+fn image_casters<'p>(
+    lp: &'p LightPlan,
+    vi: usize,
+    i: usize,
+    which: impl Fn(&'p ImageCasters) -> &'p Vec<u32>,
+) -> Option<&'p [u32]> {
+    match lp.view_images.get(vi) {
+        Some(images) => images.get(i).map(|c| which(c).as_slice()),
+        None => lp.view_casters.get(vi).map(Vec::as_slice),
     }
 }
 
@@ -283,6 +408,18 @@ pub(super) fn fixed_maps(
     set_scissor(ctx.gl, lp.scissor);
 }
 
+/// How many lit passes [`draw_maps`] draws for a light with these map views.
+pub(super) fn lit_passes(
+    lp: &LightPlan,
+    bindings: &[(bool, ShadowBinding, &[u32], Option<Scissor>)],
+) -> usize {
+    match bindings.len() {
+        0 => 1,
+        6 if lp.merged => 1,
+        n => n,
+    }
+}
+
 /// What a light's map passes write.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub(super) enum MapPass {
@@ -304,6 +441,7 @@ pub(super) fn draw_maps<'p>(
     program: impl Fn(LitVariant) -> &'p Program,
     (kind, hybrid): (MapPass, bool),
 ) {
+    let marks = Marks::of(ctx.settings.lighting.light_once, lit_passes(lp, bindings));
     let pass = |six: bool, cube: bool, s: &LitShadow, receivers: &[u32]| {
         let shadow_map = !matches!(s, LitShadow::None);
         let v = LitVariant {
@@ -328,7 +466,7 @@ pub(super) fn draw_maps<'p>(
             s
         };
         match kind {
-            MapPass::Lit => passes::lit::draw(ctx, p, lp, s, receivers),
+            MapPass::Lit => passes::lit::draw(ctx, p, lp, s, (receivers, marks)),
             MapPass::Mask => passes::lit::draw_mask(ctx, p, lp, s, receivers),
             MapPass::Mark { overwrite } => {
                 passes::hybrid::mark(ctx, p, lp, s, receivers, overwrite)

@@ -12,7 +12,7 @@ use super::fixed::{self, FixedFunction};
 use super::fragments::{FragmentBuffers, LightFragmentDraw};
 use super::id_tables::IdTables;
 use super::legacy::Legacy;
-use super::passes::lit::{LitShadow, ShadowBinding};
+use super::passes::lit::{LitShadow, Marks, ShadowBinding};
 use super::passes::shadow_map::{DepthTarget, copies_from_frame, copy_depth};
 use super::passes::{self, PassContext, set_scissor};
 use super::priority_mips;
@@ -67,7 +67,7 @@ mod measure;
 mod programs;
 mod volumes;
 
-use maps::{MapPass, draw_maps, fixed_maps};
+use maps::{MapPass, draw_maps, fixed_maps, lit_passes};
 pub use programs::FILL_SHADE;
 use programs::{LitVariant, Programs, lit_defines};
 
@@ -407,6 +407,7 @@ impl Drawer {
             draws_before: passes::surface_draws(),
             start,
             volume_stats: Vec::new(),
+            own_ms: 0.0,
             fixed: self.fixed.as_ref().filter(|_| settings.fixed_function),
         })
     }
@@ -612,6 +613,8 @@ pub(crate) struct FrameRun<'a> {
     draws_before: usize,
     start: Instant,
     volume_stats: Vec<VolumeStats>,
+    /// CPU work of the frame outside GL calls done here (the GPU extrusion meshes' builds).
+    own_ms: f64,
     /// The legacy pipeline, when the frame draws with it.
     fixed: Option<&'a FixedFunction>,
 }
@@ -658,6 +661,7 @@ impl<'a> FrameRun<'a> {
             width,
             height,
             completed,
+            own_ms: self.own_ms,
             view_proj: plan.camera.view_proj,
             passes,
             passes_frames_ago,
@@ -719,6 +723,7 @@ impl<'a> FrameRun<'a> {
             width: self.target.width,
             height: self.target.height,
             completed: true,
+            own_ms: 0.0,
             view_proj: plan.camera.view_proj,
             passes,
             passes_frames_ago: 0,

@@ -113,12 +113,13 @@ impl<'a> FrameRun<'a> {
         let mut draws = Vec::with_capacity(lp.extruded.len());
         for &(g, counting) in &lp.extruded {
             let group = &groups.groups[g];
-            if self
+            if let Some(ms) = self
                 .extrusions
                 .ensure(gl, g, group, double)
                 .map_err(RenderError::Gl)?
             {
                 self.cache.extrusions_uploaded += 1;
+                self.own_ms += ms;
             }
             let model = crate::shadow::volume::group_transform(scene, group.owner);
             draws.extend(self.extrusions.draw_of(g, model, light, counting));

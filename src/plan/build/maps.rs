@@ -3,9 +3,11 @@
 
 use super::{FrameFacts, hash_of, mat_bits, spot_exceeds_frustum};
 use crate::geometry::{Aabb, Frustum};
-use crate::options::{OmniMode, Outside, ShadowMapOptions, Warp};
+use crate::options::{
+    DepthBits, DepthSource, MapBuffer, OmniMode, Outside, ShadowMapOptions, Warp,
+};
 use crate::plan::scissor::{self, Scissor};
-use crate::plan::{LightPlan, PlanStats, cull};
+use crate::plan::{ImageCasters, LightPlan, PlanStats, cull};
 use crate::scene::{Light, LightKind, SurfaceOwner};
 use crate::shadow::frusta;
 use crate::shadow::views::{Rect, ShadowView, ViewKind, shadow_views};
@@ -123,6 +125,7 @@ impl FrameFacts<'_> {
         ));
         // Several frusta: each receiver's footprint on a face, once for all that face's frusta.
         let mut footprints: [Option<Vec<Option<Rect>>>; 6] = Default::default();
+        let moving = self.splits_maps(plan).then(|| self.moving_models());
         for vi in 0..plan.views.len() {
             let view = &plan.views[vi];
             let mut drawn = self.map_casters(l, view.kind, &view.view_proj());
@@ -134,10 +137,17 @@ impl FrameFacts<'_> {
             stats.casters_drawn += drawn.len();
             stats.casters_culled += self.caster_list.len() - drawn.len();
             let key = (on && p.cache_maps).then(|| self.map_key(light_key, view, &drawn));
+            let images = self.image_casters(l, view.kind, &drawn, moving.as_deref());
+            let static_key = images
+                .iter()
+                .any(|i| !i.moving.is_empty())
+                .then(|| self.static_map_key(light_key, view, &drawn, moving.as_deref()));
             let rect = self.face_rect(l, view, plan.scissor);
             plan.view_receivers.push(lit);
             plan.view_casters.push(drawn);
             plan.view_keys.push(key);
+            plan.view_images.push(images);
+            plan.view_static_keys.push(static_key);
             plan.view_scissors.push(rect);
         }
         plan.merged = self.merges_faces(&plan.views);
@@ -146,6 +156,8 @@ impl FrameFacts<'_> {
             plan.view_receivers.clear();
             plan.view_casters.clear();
             plan.view_keys.clear();
+            plan.view_images.clear();
+            plan.view_static_keys.clear();
             plan.view_scissors.clear();
             return Some("no caster in range");
         }
@@ -354,6 +366,112 @@ impl FrameFacts<'_> {
             drawn,
             moving,
         ))
+    }
+
+    /// Whether light `plan`'s maps are kept apart from its moving casters: a static map of the
+    /// casters that do not move, copied each frame a model moves and the models drawn over it.
+    /// Only where that copy plus the models draw what one pass over every caster draws: maps
+    /// kept by key (`plan.cache_maps`), of depth alone (an ID buffer's colour and a priority
+    /// buffer's mip chain are drawn whole), not warped (a warp follows the camera, so its
+    /// static map would not outlive a frame), of a light that does not move (the same), and
+    /// drawn through a framebuffer object: the models go straight into the map, so where maps
+    /// are copied from the frame (`shadow_map.depth_source = copy`) the frame's 24-bit depth
+    /// must give the polygon offset the unit the map does (not with 16-bit maps).
+    fn splits_maps(&self, plan: &LightPlan) -> bool {
+        let o = &self.map_options;
+        let fbo = crate::plan::fallback::disabled(self.options)
+            .is_ok_and(|d| !d.contains(&"render_to_depth_texture"));
+        let moves = self.scene.motion.lights.iter().any(|m| {
+            m.light == plan.light
+                && !matches!(m.path, crate::scene::motion::LightPath::Flicker { .. })
+        });
+        self.on()
+            && self.options.plan.cache_maps
+            && plan.buffer == MapBuffer::Depth
+            && plan.technique.warp().is_none()
+            && !moves
+            && fbo
+            && (o.depth_source == DepthSource::Fbo || o.depth_bits != DepthBits::D16)
+    }
+
+    /// Per model, whether the scene's motion moves it (walks it or plays its animation): its
+    /// surfaces are drawn over a copy of a static map rather than into it.
+    fn moving_models(&self) -> Vec<bool> {
+        let m = &self.scene.motion;
+        let mut moving = vec![false; self.scene.models.len()];
+        for i in m
+            .rigs
+            .iter()
+            .map(|r| r.model)
+            .chain(m.walks.iter().map(|w| w.model))
+        {
+            if let Some(flag) = moving.get_mut(i) {
+                *flag = true;
+            }
+        }
+        moving
+    }
+
+    /// Whether caster `c` belongs to a model `moving` marks.
+    fn is_moving(&self, c: u32, moving: &[bool]) -> bool {
+        match self.scene.surfaces[c as usize].owner {
+            SurfaceOwner::Model(m) => moving.get(m).copied().unwrap_or(false),
+            SurfaceOwner::World => false,
+        }
+    }
+
+    /// The casters of each image of a view of light `l` whose casters are `drawn`: one image,
+    /// or a cube's six faces, each with those in its frustum (`plan.cull_casters`; a caster
+    /// outside a face's pyramid draws nothing there). With `moving` (the split), the moving
+    /// models' surfaces are set apart.
+    fn image_casters(
+        &self,
+        l: &Light,
+        kind: ViewKind,
+        drawn: &[u32],
+        moving: Option<&[bool]>,
+    ) -> Vec<ImageCasters> {
+        let cull = kind == ViewKind::Cube && self.on() && self.options.plan.cull_casters;
+        let faces: Vec<Option<Frustum>> = match kind {
+            ViewKind::Cube => (0..6)
+                .map(|f| cull.then(|| cull::face_pyramid(l.position, f)))
+                .collect(),
+            _ => vec![None],
+        };
+        faces
+            .iter()
+            .map(|pyramid| {
+                let mut image = ImageCasters::default();
+                for &c in drawn {
+                    let b = &self.scene.surfaces[c as usize].bounds;
+                    if pyramid.as_ref().is_some_and(|f| !f.intersects_aabb(b)) {
+                        continue;
+                    }
+                    match moving.is_some_and(|m| self.is_moving(c, m)) {
+                        true => image.moving.push(c),
+                        false => image.base.push(c),
+                    }
+                }
+                image
+            })
+            .collect()
+    }
+
+    /// What a view's static map depends on: [`Self::map_key`]'s light and view with only the
+    /// casters that do not move (the models among them where they stand, in which pose).
+    fn static_map_key(
+        &self,
+        light_key: u64,
+        view: &ShadowView,
+        drawn: &[u32],
+        moving: Option<&[bool]>,
+    ) -> u64 {
+        let still: Vec<u32> = drawn
+            .iter()
+            .copied()
+            .filter(|&c| !moving.is_some_and(|m| self.is_moving(c, m)))
+            .collect();
+        hash_of(("static", self.map_key(light_key, view, &still)))
     }
 
     /// Where a view's lit pass may draw: an omni light's six spots get the face's part of the

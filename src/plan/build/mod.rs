@@ -353,6 +353,8 @@ impl<'a> FrameFacts<'a> {
             view_receivers: Vec::new(),
             view_casters: Vec::new(),
             view_keys: Vec::new(),
+            view_images: Vec::new(),
+            view_static_keys: Vec::new(),
             frusta: None,
             scissor,
             view_scissors: Vec::new(),

@@ -122,14 +122,22 @@ impl FrameFacts<'_> {
     /// are drawn too, and no per-piece test says depth-pass is safe for them).
     fn hand_to_gpu(&self, plan: &mut LightPlan) {
         let o = &self.options;
+        let light_moves = self.scene.motion.lights.iter().any(|m| {
+            m.light == plan.light
+                && !matches!(m.path, crate::scene::motion::LightPath::Flicker { .. })
+        });
         let gpu = |owner: SurfaceOwner| match o.shadow_volume.gpu_extrusion {
-            GpuExtrusion::None => false,
+            // `auto` is resolved by the profile before planning; unresolved, the CPU builds.
+            GpuExtrusion::None | GpuExtrusion::Auto => false,
             GpuExtrusion::Models => matches!(owner, SurfaceOwner::Model(_)),
+            GpuExtrusion::Moving => light_moves || matches!(owner, SurfaceOwner::Model(_)),
             GpuExtrusion::All => true,
         };
         // The shader extrudes to infinity only, and needs the shader pipeline.
-        if o.shadow_volume.gpu_extrusion == GpuExtrusion::None
-            || o.shadow_volume.extrusion != volume::Extrusion::Infinite
+        if matches!(
+            o.shadow_volume.gpu_extrusion,
+            GpuExtrusion::None | GpuExtrusion::Auto
+        ) || o.shadow_volume.extrusion != volume::Extrusion::Infinite
             || o.gl.pipeline == Pipeline::FixedFunction
         {
             return;

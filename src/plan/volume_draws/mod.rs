@@ -120,7 +120,7 @@ pub struct VolumeStats {
 }
 
 /// Which triangles of a caster group one drawn piece holds.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
 pub enum PieceId {
     /// A whole connected component (the paper's frame, without `plan.cull_casters`).
     Component(usize),
@@ -184,7 +184,9 @@ pub struct VolumeDraw {
 /// the casters' transforms and poses. While all of it is the same, the draws are what they were.
 #[derive(PartialEq)]
 struct DrawInputs {
-    plan: LightPlan,
+    /// A hash of the plan's fields the draws are made from (not its `reason`, which under
+    /// `technique = auto` holds measured times and changes every frame).
+    plan: u64,
     depth: u64,
     camera: CameraSetup,
     options: ShadowVolumeOptions,
@@ -203,7 +205,7 @@ impl DrawInputs {
     ) -> Self {
         let light = &scene.lights[lp.light];
         DrawInputs {
-            plan: lp.clone(),
+            plan: plan_hash(lp),
             depth: p.depth_generation,
             camera: *p.camera,
             options: o.clone(),
@@ -233,11 +235,41 @@ impl DrawInputs {
     }
 }
 
+/// A hash of what a light's draws read of its plan.
+fn plan_hash(lp: &LightPlan) -> u64 {
+    let mut h = std::hash::DefaultHasher::new();
+    (
+        lp.light,
+        std::mem::discriminant(&lp.technique),
+        &lp.near_plane_triangles,
+        lp.scissor.map(|s| [s.x, s.y, s.width, s.height]),
+    )
+        .hash(&mut h);
+    for v in &lp.volumes {
+        (v.group, v.piece, v.counting as u8, v.triangles).hash(&mut h);
+    }
+    for b in &lp.volume_receivers {
+        [b.min.to_array(), b.max.to_array()]
+            .map(|a| a.map(f32::to_bits))
+            .hash(&mut h);
+    }
+    std::hash::Hasher::finish(&h)
+}
+
 struct CachedPart {
     key: u64,
     mesh: volume::VolumeMesh,
     /// The boxes of the mesh's blocks of triangles, for `plan.cull_clipped`.
     blocks: Vec<Option<Aabb>>,
+    /// Built against the light's whole range with both caps, and kept while not drawn (see
+    /// [`Piece::kept`]); `base` is its key without the receivers and `range` the light's range
+    /// list it was checked against, so that a frame whose list is unchanged checks nothing
+    /// else.
+    kept: bool,
+    base: u64,
+    range: u64,
+    /// When it was last planned (the planner's count of prepares), for eviction.
+    used: u64,
 }
 
 /// The planner's per-piece decisions that need the receivers a piece's shadow reaches (known
@@ -272,6 +304,9 @@ pub struct PieceChoices<'a> {
     /// `plan.reuse_volume_draws`: a light's draws are kept, and drawn again while nothing they
     /// are made from changed.
     pub reuse_draws: bool,
+    /// `plan.keep_volumes`: a still light's pieces of still groups are built against its
+    /// range and kept (see [`Piece::kept`]).
+    pub keep: bool,
     /// Which depth `depth` is: a count the renderer advances whenever the depth it reads back
     /// differs from the one it read before, so that draws made from an earlier depth are
     /// never taken for this one's.
@@ -312,6 +347,10 @@ struct Piece {
     /// A split part's triangles (None: those `id` names), and a hash of them for its key.
     subset: Option<volume::Component>,
     subset_key: u64,
+    /// Built against every receiver in the light's range (not only those in view) with both
+    /// caps, so that neither the camera nor the counting changes it, and kept across frames
+    /// while not drawn: a still light's piece of a still group, unsplit.
+    kept: bool,
 }
 
 impl Piece {
@@ -346,13 +385,41 @@ pub struct LightVolumeDraws {
     layout: u64,
     /// What the draws were made from (`plan.reuse_volume_draws`; None: not kept).
     inputs: Option<DrawInputs>,
+    /// The light as last prepared (position, radius), and each model group's transform and
+    /// pose then: what did not change since is still, and its pieces are kept.
+    light_at: Option<(glam::Vec3, f32)>,
+    groups_at: HashMap<usize, u64>,
+    /// The light's range receivers (world space) and a hash of them.
+    range: RangeReceivers,
+    /// A hash of the kept region of the buffer (its parts' keys in order), and the vertices
+    /// the GPU buffer was last allocated for.
+    kept_layout: u64,
+    capacity: usize,
+}
+
+/// The boxes of every receiver in a light's range, in view or not: kept pieces are built
+/// against them. The world's are found once per light position; the models' every frame.
+#[derive(Default)]
+struct RangeReceivers {
+    world_key: Option<u64>,
+    world: Vec<Aabb>,
+    boxes: Vec<Aabb>,
+    hash: u64,
+    /// Each model's reach ([`crate::scene::motion::Motion::reach`]), found once: a moving
+    /// model stands for it by that box while it stays inside, so that its motion changes
+    /// nothing kept.
+    reach: Option<Vec<Option<Aabb>>>,
 }
 
 /// The buffers a light's draws need this frame (None: what was uploaded before still holds).
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct VolumeUpload {
-    /// Every part's vertices in buffer order (`vec4`, w = 0 at infinity).
+    /// Vertices in buffer order (`vec4`, w = 0 at infinity) from vertex `at` on: every part's,
+    /// or those after the kept parts when only the others changed.
     pub vertices: Option<Vec<[f32; 4]>>,
+    pub at: usize,
+    /// Allocate the vertex buffer for this many vertices first (its contents are lost).
+    pub allocate: Option<usize>,
     /// The index list of the parts drawn through one (`plan.cull_clipped`).
     pub indices: Option<Vec<u32>>,
 }
@@ -361,6 +428,8 @@ pub struct VolumeUpload {
 #[derive(Default)]
 pub struct VolumePlanner {
     lights: HashMap<usize, LightVolumeDraws>,
+    /// Prepares so far: the clock of [`CachedPart::used`].
+    clock: u64,
     /// The depth clip planes fitted since the depth buffer last changed, by rectangle and
     /// plane count (`plan.reuse_depth_fits`): a fit reads nothing else.
     fits: HashMap<FitKey, [[f32; 4]; MAX_PLANES]>,
@@ -377,10 +446,14 @@ struct PlannedPieces {
 struct Layout {
     parts: Vec<PartRange>,
     indices: Vec<u32>,
-    /// Vertices of every part, in order.
+    /// The meshes in buffer order (kept parts first, drawn or not), and the vertices of all.
+    order: Vec<(usize, PieceId)>,
     vertex_count: usize,
     /// A hash of the parts' keys in order and their length.
     hash: u64,
+    /// The kept region: its vertices and a hash of its parts' keys in order.
+    kept_vertices: usize,
+    kept_hash: u64,
 }
 
 impl VolumePlanner {
@@ -454,6 +527,7 @@ impl VolumePlanner {
         choices: PieceChoices,
         inputs: Option<DrawInputs>,
     ) -> Result<(), VolumeDrawError> {
+        self.clock += 1;
         let lv = self.lights.entry(lp.light).or_default();
         let start = Instant::now();
         let camera = choices.camera;
@@ -463,7 +537,12 @@ impl VolumePlanner {
             receivers_hidden: lp.volume_receivers.len() - receivers.len(),
             ..VolumeStats::default()
         };
-        let planned = plan_pieces(scene, groups, lp, &receivers, &choices);
+        let mut planned = plan_pieces(scene, groups, lp, &receivers, &choices);
+        let culling = !lp.volume_receivers.is_empty();
+        lv.mark_kept(scene, groups, &mut planned.pieces, choices.keep);
+        if culling && planned.pieces.iter().any(|p| p.kept) {
+            lv.range.update(scene, lp.light);
+        }
         let drawn_pieces = if choices.merge {
             let whole = lp.scissor.unwrap_or_else(|| Scissor::full(camera));
             merge(planned.pieces, groups, whole, &mut stats)
@@ -471,13 +550,12 @@ impl VolumePlanner {
             planned.pieces
         };
         let light_world = scene.lights[lp.light].position;
-        let culling = !lp.volume_receivers.is_empty();
         let keys = lv.build_parts(
             groups,
             &drawn_pieces,
             &planned.local_boxes,
             (light_world, o, culling, choices.truncate),
-            &mut stats,
+            (self.clock, &mut stats),
         );
         let layout = lv.lay_out(
             &drawn_pieces,
@@ -490,16 +568,165 @@ impl VolumePlanner {
         stats.rebuilt = stats.parts_built > 0;
         let draws = draws_of(&layout.parts);
         check_bounds(lp.light, &draws, &layout.indices, layout.vertex_count)?;
+        let vertices = lv.upload_for(&layout, stats.rebuilt);
         lv.upload = VolumeUpload {
-            vertices: (layout.hash != lv.layout || stats.rebuilt).then(|| lv.vertices(&layout)),
+            at: vertices.as_ref().map_or(0, |v| v.at),
+            allocate: vertices.as_ref().and_then(|v| v.allocate),
+            vertices: vertices.map(|v| v.vertices),
             indices: (!layout.indices.is_empty()).then_some(layout.indices),
         };
-        lv.layout = layout.hash;
         stats.build_ms = start.elapsed().as_secs_f64() * 1e3;
         lv.draws = draws;
         lv.parts = layout.parts;
         lv.inputs = inputs;
         lv.stats = stats;
+        self.evict(o.kept_mb);
         Ok(())
+    }
+
+    /// Drops the least recently planned kept parts, of every light, until those kept hold at
+    /// most `budget_mb` of vertices (each is held twice: here and in the GPU's buffer). Parts
+    /// planned by the latest prepare stay.
+    fn evict(&mut self, budget_mb: f32) {
+        let vertex_bytes = std::mem::size_of::<[f32; 4]>();
+        let budget = (f64::from(budget_mb) * 1048576.0 / vertex_bytes as f64) as usize;
+        let mut kept: Vec<(u64, usize, (usize, PieceId), usize)> = self
+            .lights
+            .iter()
+            .flat_map(|(&light, lv)| {
+                lv.meshes
+                    .iter()
+                    .filter(|(_, c)| c.kept)
+                    .map(move |(&id, c)| (c.used, light, id, c.mesh.vertices.len()))
+            })
+            .collect();
+        let mut held: usize = kept.iter().map(|k| k.3).sum();
+        if held <= budget {
+            return;
+        }
+        kept.sort_unstable_by_key(|k| (k.0, k.1, k.2));
+        for (used, light, id, vertices) in kept {
+            if held <= budget || used >= self.clock {
+                break;
+            }
+            if let Some(lv) = self.lights.get_mut(&light) {
+                lv.meshes.remove(&id);
+                held -= vertices;
+            }
+        }
+    }
+}
+
+impl LightVolumeDraws {
+    /// Marks the pieces kept: those of a still light (where it was when last prepared, or
+    /// never prepared) and of a still group (the world, or a model as it was then), unsplit.
+    /// Notes the light and groups as they are now; a light that moved drops its kept parts.
+    fn mark_kept(
+        &mut self,
+        scene: &Scene,
+        groups: &CasterGroups,
+        pieces: &mut [Piece],
+        keep: bool,
+    ) {
+        let l = &scene.lights[self.light];
+        let at = (l.position, l.radius);
+        let light_still = self.light_at.is_none_or(|a| a == at);
+        if !light_still {
+            self.meshes.retain(|_, c| !c.kept);
+        }
+        self.light_at = Some(at);
+        for p in pieces.iter_mut() {
+            let g = &groups.groups[p.group];
+            let state = match g.owner {
+                crate::scene::SurfaceOwner::World => None,
+                crate::scene::SurfaceOwner::Model(_) => {
+                    let mut h = std::hash::DefaultHasher::new();
+                    (p.model.to_cols_array().map(f32::to_bits), g.pose).hash(&mut h);
+                    Some(std::hash::Hasher::finish(&h))
+                }
+            };
+            let group_still = match state {
+                None => true,
+                Some(now) => self.groups_at.insert(p.group, now) == Some(now),
+            };
+            p.kept = keep && light_still && group_still && !matches!(p.id, PieceId::Split { .. });
+        }
+    }
+}
+
+impl RangeReceivers {
+    /// The boxes of every visible surface within the light's range: the world's found again
+    /// only when the light moved (or the scene changed), the models' each time.
+    fn update(&mut self, scene: &Scene, light: usize) {
+        let l = &scene.lights[light];
+        let in_range = |s: &&crate::scene::Surface| {
+            scene.materials[s.material].visible
+                && crate::plan::cull::sphere_meets_aabb(l.position, l.radius, &s.bounds)
+        };
+        let is_world = |s: &&crate::scene::Surface| s.owner == crate::scene::SurfaceOwner::World;
+        let mut h = std::hash::DefaultHasher::new();
+        (
+            l.position.to_array().map(f32::to_bits),
+            l.radius.to_bits(),
+            scene.surfaces.len(),
+        )
+            .hash(&mut h);
+        let world_key = std::hash::Hasher::finish(&h);
+        if self.world_key != Some(world_key) {
+            self.world = scene
+                .surfaces
+                .iter()
+                .filter(is_world)
+                .filter(in_range)
+                .map(|s| s.bounds)
+                .collect();
+            self.world_key = Some(world_key);
+        }
+        self.boxes.clear();
+        self.boxes.extend_from_slice(&self.world);
+        let reach = self.reach.get_or_insert_with(|| {
+            (0..scene.models.len())
+                .map(|m| scene.motion.reach(scene, m))
+                .collect()
+        });
+        // A model inside its reach is that box; outside (moved some other way), its surfaces.
+        let mut inside: Vec<Option<bool>> = vec![None; scene.models.len()];
+        for s in scene.surfaces.iter().filter(|s| !is_world(s)) {
+            let crate::scene::SurfaceOwner::Model(m) = s.owner else {
+                continue;
+            };
+            let within = reach
+                .get(m)
+                .copied()
+                .flatten()
+                .filter(|r| r.contains(&s.bounds));
+            match (within, inside.get(m).copied().flatten()) {
+                (Some(_), None) => inside[m] = Some(true),
+                (None, _) => inside[m] = Some(false),
+                _ => {}
+            }
+        }
+        for (m, r) in reach.iter().enumerate() {
+            if let (Some(r), Some(true)) = (r, inside[m])
+                && crate::plan::cull::sphere_meets_aabb(l.position, l.radius, r)
+            {
+                self.boxes.push(*r);
+            }
+        }
+        let models = scene.surfaces.iter().filter(|s| !is_world(s));
+        let not_inside = |s: &&crate::scene::Surface| match s.owner {
+            crate::scene::SurfaceOwner::Model(m) => inside.get(m).copied().flatten() != Some(true),
+            crate::scene::SurfaceOwner::World => false,
+        };
+        self.boxes
+            .extend(models.filter(not_inside).filter(in_range).map(|s| s.bounds));
+        let mut h = std::hash::DefaultHasher::new();
+        world_key.hash(&mut h);
+        for b in &self.boxes[self.world.len()..] {
+            [b.min.to_array(), b.max.to_array()]
+                .map(|a| a.map(f32::to_bits))
+                .hash(&mut h);
+        }
+        self.hash = std::hash::Hasher::finish(&h);
     }
 }

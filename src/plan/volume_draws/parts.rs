@@ -8,7 +8,7 @@ use super::{
 use crate::geometry::Aabb;
 use crate::options::ShadowVolumeOptions;
 use crate::plan::clipped::{ClipTest, block_bounds};
-use crate::plan::depth_bounds::{DepthBound, EMPTY_RANGE, MAX_PLANES, range_union};
+use crate::plan::depth_bounds::{DepthBound, DepthRange, EMPTY_RANGE, MAX_PLANES, range_union};
 use crate::plan::occlusion::DepthPyramid;
 use crate::plan::scissor::Scissor;
 use crate::plan::{CameraSetup, LightPlan};
@@ -40,6 +40,8 @@ fn part_key(
     model: &Mat4,
     receivers: u64,
 ) -> u64 {
+    // A kept part holds both caps: its counting is a choice of draw.
+    let caps = if p.kept { 2 } else { p.counting as u8 };
     let mut h = DefaultHasher::new();
     receivers.hash(&mut h);
     light.to_array().map(f32::to_bits).hash(&mut h);
@@ -51,7 +53,7 @@ fn part_key(
         p.group,
         p.id,
         p.subset_key,
-        p.counting as u8,
+        caps,
     )
         .hash(&mut h);
     model.to_cols_array().map(f32::to_bits).hash(&mut h);
@@ -129,23 +131,54 @@ impl LightVolumeDraws {
         self.upload = VolumeUpload::default();
     }
 
-    /// Builds the parts whose key changed and drops those no longer drawn; returns each
-    /// piece's key. `(light, options, culling, truncate)`: the light in world space, the
+    /// Builds the parts whose key changed and drops the unkept ones no longer drawn; returns
+    /// each piece's key. `(light, options, culling, truncate)`: the light in world space, the
     /// volume options, whether receivers are known (caster culling) and
-    /// `plan.truncate_volumes`.
+    /// `plan.truncate_volumes`; `clock` dates the parts used.
     pub(super) fn build_parts(
         &mut self,
         groups: &CasterGroups,
         pieces: &[Piece],
         local_boxes: &HashMap<usize, (Vec<Aabb>, Vec<u64>)>,
         (light, o, culling, truncate): (glam::Vec3, &ShadowVolumeOptions, bool, bool),
-        stats: &mut VolumeStats,
+        (clock, stats): (u64, &mut VolumeStats),
     ) -> Vec<u64> {
-        let s = settings(o);
         let mut keys = Vec::with_capacity(pieces.len());
+        // The range receivers in each group's space, made when a kept part needs them.
+        let mut range_local: HashMap<usize, Vec<Aabb>> = HashMap::new();
         for p in pieces {
             let group = &groups.groups[p.group];
-            let (boxes, box_hashes) = &local_boxes[&p.group];
+            let (near, receivers_key) = if p.kept {
+                let base = part_key(light, o, p, &p.model, 0);
+                let unchanged = self.meshes.get(&(p.group, p.id)).is_some_and(|c| {
+                    o.caching && c.kept && c.base == base && c.range == self.range.hash
+                });
+                if unchanged {
+                    let c = self.meshes.get_mut(&(p.group, p.id)).expect("just found");
+                    c.used = clock;
+                    stats.parts_reused += 1;
+                    count_part(p, stats);
+                    keys.push(c.key);
+                    continue;
+                }
+                let boxes = range_local.entry(p.group).or_insert_with(|| {
+                    let to_local = p.model.inverse();
+                    self.range
+                        .boxes
+                        .iter()
+                        .map(|b| b.transformed(&to_local))
+                        .collect()
+                });
+                near_boxes(boxes, p, group)
+            } else {
+                let (boxes, box_hashes) = &local_boxes[&p.group];
+                let near: Vec<Aabb> = p.near.iter().map(|&i| boxes[i as usize]).collect();
+                let mut h = DefaultHasher::new();
+                for &i in &p.near {
+                    box_hashes[i as usize].hash(&mut h);
+                }
+                (near, h.finish())
+            };
             let receivers_key = {
                 let mut h = DefaultHasher::new();
                 // A reshaped model's pieces are new triangles.
@@ -153,57 +186,47 @@ impl LightVolumeDraws {
                 culling.hash(&mut h);
                 truncate.hash(&mut h);
                 p.local_radius.to_bits().hash(&mut h);
-                for &i in &p.near {
-                    box_hashes[i as usize].hash(&mut h);
-                }
+                receivers_key.hash(&mut h);
                 h.finish()
             };
             let key = part_key(light, o, p, &p.model, receivers_key);
-            let cached = self
-                .meshes
-                .get(&(p.group, p.id))
-                .is_some_and(|c| o.caching && c.key == key);
-            if cached {
-                stats.parts_reused += 1;
-            } else {
-                let near: Vec<Aabb> = p.near.iter().map(|&i| boxes[i as usize]).collect();
-                let cull = culling.then_some(volume::ReceiverCull {
-                    boxes: &near,
-                    radius: p.local_radius,
-                    // An explicit finite extrusion (the paper's option) is the user's to see.
-                    truncate: truncate && o.extrusion == volume::Extrusion::Infinite,
-                });
-                let piece = p.triangles(group);
-                let mesh = volume::build_volume_of(
-                    group,
-                    &piece,
-                    p.light_local.as_dvec3(),
-                    &s,
-                    p.counting == Counting::ZFail,
-                    cull,
-                );
-                stats.triangles_culled += mesh.culled;
-                stats.triangles_tested += piece.triangles.len();
-                stats.parts_built += 1;
-                let blocks = block_bounds(&mesh.vertices);
-                self.meshes
-                    .insert((p.group, p.id), CachedPart { key, mesh, blocks });
+            let cached = self.meshes.get_mut(&(p.group, p.id));
+            match cached {
+                Some(c) if o.caching && c.key == key => {
+                    c.used = clock;
+                    c.range = self.range.hash;
+                    stats.parts_reused += 1;
+                }
+                _ => {
+                    let part = build_part(group, p, &near, (o, culling, truncate), stats);
+                    let base = part_key(light, o, p, &p.model, 0);
+                    self.meshes.insert(
+                        (p.group, p.id),
+                        CachedPart {
+                            key,
+                            blocks: block_bounds(&part.vertices),
+                            mesh: part,
+                            kept: p.kept,
+                            base,
+                            range: self.range.hash,
+                            used: clock,
+                        },
+                    );
+                }
             }
-            match p.counting {
-                Counting::ZFail => stats.zfail_parts += 1,
-                Counting::ZPass => stats.zpass_parts += 1,
-            }
+            count_part(p, stats);
             keys.push(key);
         }
-        // Parts no longer drawn are dropped: the cache holds this frame's parts only.
+        // Unkept parts no longer drawn are dropped; kept ones wait for eviction.
         let wanted: HashSet<(usize, PieceId)> = pieces.iter().map(|p| (p.group, p.id)).collect();
-        self.meshes.retain(|k, _| wanted.contains(k));
+        self.meshes.retain(|k, c| c.kept || wanted.contains(k));
         keys
     }
 
-    /// The buffer layout: depth-fail parts first, each group's together, so that runs of
-    /// parts can share a draw call (a depth-pass part has no caps: its sides are all it
-    /// draws); each part's depth clip and, under `plan.cull_clipped`, the triangles it keeps.
+    /// The buffer layout: the kept parts first, drawn or not, in a fixed order, so that while
+    /// none is built or evicted the region stays as uploaded; then the others, depth-fail
+    /// first, each group's together, so that runs of parts can share a draw call. Each drawn
+    /// part's depth clip and, under `plan.cull_clipped`, the triangles it keeps.
     pub(super) fn lay_out(
         &self,
         pieces: &[Piece],
@@ -213,104 +236,283 @@ impl LightVolumeDraws {
         fits: &mut HashMap<FitKey, [[f32; 4]; MAX_PLANES]>,
         stats: &mut VolumeStats,
     ) -> Layout {
-        let camera = choices.camera;
-        let mut parts = Vec::with_capacity(pieces.len());
-        // Vertices the buffer holds before each part.
-        let mut total = 0usize;
-        let mut scissored = 0.0;
-        let mut order: Vec<_> = pieces.iter().zip(keys).collect();
-        order.sort_by_key(|(p, _)| (p.counting != Counting::ZFail, p.group));
-        // The buffer holds every planned part in this order, so that its layout follows the
-        // part keys alone; a part off screen is skipped when drawing, not when uploading (as
-        // the camera turns, parts leave and enter the screen with nothing rebuilt).
-        let mut layout = DefaultHasher::new();
-        let mut drawn = 0usize;
-        let mut indices = Vec::new();
-        let mut depth_range = Some(EMPTY_RANGE);
-        for (p, key) in order {
-            let cached = &self.meshes[&(p.group, p.id)];
-            let mesh = &cached.mesh;
-            if mesh.vertices.is_empty() {
-                continue;
+        let mut placing = Placing::new();
+        let planned_kept: HashMap<(usize, PieceId), usize> = pieces
+            .iter()
+            .enumerate()
+            .filter(|(_, p)| p.kept)
+            .map(|(i, p)| ((p.group, p.id), i))
+            .collect();
+        let mut kept: Vec<(usize, PieceId)> = self
+            .meshes
+            .iter()
+            .filter(|(_, c)| c.kept)
+            .map(|(k, _)| *k)
+            .collect();
+        kept.sort_unstable();
+        let mut kept_hash = DefaultHasher::new();
+        for id in kept {
+            let cached = &self.meshes[&id];
+            cached.key.hash(&mut kept_hash);
+            match planned_kept.get(&id) {
+                Some(&i) => placing.place(&pieces[i], cached, lp, choices, fits, stats),
+                None => placing.skip(id, cached),
             }
-            let mut range = PartRange {
-                group: p.group,
-                piece: p.id,
-                counting: p.counting,
-                model: p.model,
-                first: total as i32,
-                sides: mesh.side_vertices as i32,
-                caps: mesh.cap_vertices as i32,
-                scissor: p.rect,
-                depth_clip: part_depth_clip(p, lp, choices, fits, stats),
-                depth_bounds: p.depth_range.filter(|_| choices.depth_bounds),
-                elements: None,
-            };
-            let test = ClipTest::new(camera.view_proj * p.model, &range.depth_clip)
-                .filter(|_| choices.cull_clipped && range.drawn());
-            if let Some(test) = test {
-                let start = indices.len();
-                let rejected =
-                    test.kept_triangles(&mesh.vertices, &cached.blocks, total as u32, &mut indices);
-                if rejected > 0 {
-                    stats.triangles_clipped += rejected;
-                    range.elements = Some((start as i32, (indices.len() - start) as i32));
-                } else {
-                    // Nothing rejected: the vertices drawn as they are.
-                    indices.truncate(start);
-                }
-            }
-            key.hash(&mut layout);
-            total += mesh.vertices.len();
-            parts.push(range);
-            if !range.drawn() {
-                if range.elements.is_none() {
-                    stats.parts_offscreen += 1;
-                }
-                continue;
-            }
-            drawn += 1;
-            if mesh.truncated {
-                stats.parts_truncated += 1;
-            }
-            if range.depth_clip != [[0.0; 4]; MAX_PLANES] {
-                stats.parts_depth_clipped += 1;
-            }
-            if range.depth_bounds.is_some() {
-                stats.parts_depth_bounded += 1;
-            }
-            depth_range = depth_range
-                .zip(p.depth_range)
-                .map(|(a, b)| range_union(a, b));
-            scissored += p.rect.map_or(1.0, |s| {
-                s.area() as f64 / Scissor::full(camera).area().max(1) as f64
-            });
-            stats.quads += mesh.quads;
-            stats.cap_triangles += mesh.cap_vertices / 3;
         }
-        total.hash(&mut layout);
-        stats.depth_range = depth_range;
-        stats.parts_drawn = drawn;
-        stats.part_scissor_fraction = if drawn == 0 {
-            0.0
-        } else {
-            scissored / drawn as f64
-        };
+        let kept_vertices = placing.total;
+        kept_vertices.hash(&mut kept_hash);
+        let mut others: Vec<_> = pieces.iter().zip(keys).filter(|(p, _)| !p.kept).collect();
+        others.sort_by_key(|(p, _)| (p.counting != Counting::ZFail, p.group));
+        let mut layout = DefaultHasher::new();
+        for (p, key) in others {
+            key.hash(&mut layout);
+            let cached = &self.meshes[&(p.group, p.id)];
+            placing.place(p, cached, lp, choices, fits, stats);
+        }
+        placing.total.hash(&mut layout);
+        kept_hash.finish().hash(&mut layout);
+        placing.finish(stats);
         Layout {
-            parts,
-            indices,
-            vertex_count: total,
+            parts: placing.parts,
+            indices: placing.indices,
+            order: placing.order,
+            vertex_count: placing.total,
             hash: layout.finish(),
+            kept_vertices,
+            kept_hash: kept_hash.finish(),
         }
     }
 
-    /// Every part's vertices in the layout's order.
-    pub(super) fn vertices(&self, layout: &Layout) -> Vec<[f32; 4]> {
+    /// The vertices of the layout's meshes from mesh `from` on, in order.
+    pub(super) fn vertices(&self, layout: &Layout, from: usize) -> Vec<[f32; 4]> {
         let mut vertices: Vec<[f32; 4]> = Vec::with_capacity(layout.vertex_count);
-        for p in &layout.parts {
-            vertices.extend_from_slice(&self.meshes[&(p.group, p.piece)].mesh.vertices);
+        for id in &layout.order[from..] {
+            vertices.extend_from_slice(&self.meshes[id].mesh.vertices);
         }
         vertices
+    }
+
+    /// What to upload for `layout`: nothing while the buffer holds it; the vertices after the
+    /// kept region while that region is as uploaded and the buffer is large enough; else the
+    /// whole buffer, allocated with room to grow (a kept part seen for the first time then
+    /// does not reallocate it every frame).
+    pub(super) fn upload_for(&mut self, layout: &Layout, rebuilt: bool) -> Option<VertexUpload> {
+        let kept_same = layout.kept_hash == self.kept_layout;
+        let changed = layout.hash != self.layout || rebuilt;
+        let upload = if !kept_same || layout.vertex_count > self.capacity {
+            let allocate = layout.vertex_count + layout.vertex_count / 4 + 1024;
+            self.capacity = allocate;
+            Some(VertexUpload {
+                vertices: self.vertices(layout, 0),
+                at: 0,
+                allocate: Some(allocate),
+            })
+        } else if changed {
+            let first_other = layout.order.len()
+                - layout
+                    .order
+                    .iter()
+                    .rev()
+                    .take_while(|id| !self.meshes[*id].kept)
+                    .count();
+            Some(VertexUpload {
+                vertices: self.vertices(layout, first_other),
+                at: layout.kept_vertices,
+                allocate: None,
+            })
+        } else {
+            None
+        };
+        self.kept_layout = layout.kept_hash;
+        self.layout = layout.hash;
+        upload
+    }
+}
+
+/// What [`LightVolumeDraws::upload_for`] decides: vertices written from vertex `at` on, the
+/// buffer allocated for `allocate` vertices first.
+pub(super) struct VertexUpload {
+    pub vertices: Vec<[f32; 4]>,
+    pub at: usize,
+    pub allocate: Option<usize>,
+}
+
+/// The range receiver boxes (in the group's space) that piece `p`'s shadow can reach, and a
+/// hash of them.
+fn near_boxes(boxes: &[Aabb], p: &Piece, group: &volume::CasterGroup) -> (Vec<Aabb>, u64) {
+    let shadow = volume::shadow_bounds(&p.triangles(group).bounds, p.light_local, p.local_radius);
+    let near: Vec<Aabb> = boxes
+        .iter()
+        .filter(|b| b.intersects(&shadow))
+        .copied()
+        .collect();
+    let mut h = DefaultHasher::new();
+    for b in &near {
+        [b.min.to_array(), b.max.to_array()]
+            .map(|a| a.map(f32::to_bits))
+            .hash(&mut h);
+    }
+    (near, h.finish())
+}
+
+/// Builds piece `p`'s volume against the receiver boxes `near` (in the group's space): with
+/// both caps when kept, else with those its counting needs.
+fn build_part(
+    group: &volume::CasterGroup,
+    p: &Piece,
+    near: &[Aabb],
+    (o, culling, truncate): (&ShadowVolumeOptions, bool, bool),
+    stats: &mut VolumeStats,
+) -> volume::VolumeMesh {
+    let cull = culling.then_some(volume::ReceiverCull {
+        boxes: near,
+        radius: p.local_radius,
+        // An explicit finite extrusion (the paper's option) is the user's to see.
+        truncate: truncate && o.extrusion == volume::Extrusion::Infinite,
+    });
+    let piece = p.triangles(group);
+    let mesh = volume::build_volume_of(
+        group,
+        &piece,
+        p.light_local.as_dvec3(),
+        &settings(o),
+        p.kept || p.counting == Counting::ZFail,
+        cull,
+    );
+    stats.triangles_culled += mesh.culled;
+    stats.triangles_tested += piece.triangles.len();
+    stats.parts_built += 1;
+    mesh
+}
+
+fn count_part(p: &Piece, stats: &mut VolumeStats) {
+    match p.counting {
+        Counting::ZFail => stats.zfail_parts += 1,
+        Counting::ZPass => stats.zpass_parts += 1,
+    }
+}
+
+/// The layout as it is placed, part after part.
+struct Placing {
+    parts: Vec<PartRange>,
+    indices: Vec<u32>,
+    order: Vec<(usize, PieceId)>,
+    /// Vertices placed so far.
+    total: usize,
+    drawn: usize,
+    scissored: f64,
+    depth_range: Option<DepthRange>,
+}
+
+impl Placing {
+    fn new() -> Placing {
+        Placing {
+            parts: Vec::new(),
+            indices: Vec::new(),
+            order: Vec::new(),
+            total: 0,
+            drawn: 0,
+            scissored: 0.0,
+            depth_range: Some(EMPTY_RANGE),
+        }
+    }
+
+    /// A kept mesh not planned this frame: in the buffer, not drawn.
+    fn skip(&mut self, id: (usize, PieceId), cached: &CachedPart) {
+        self.order.push(id);
+        self.total += cached.mesh.vertices.len();
+    }
+
+    /// Piece `p`'s part at the current place: its range (the vertices its counting draws),
+    /// depth clip and kept triangles, and the stats of a drawn part.
+    fn place(
+        &mut self,
+        p: &Piece,
+        cached: &CachedPart,
+        lp: &LightPlan,
+        choices: &PieceChoices,
+        fits: &mut HashMap<FitKey, [[f32; 4]; MAX_PLANES]>,
+        stats: &mut VolumeStats,
+    ) {
+        let mesh = &cached.mesh;
+        let first = self.total;
+        self.order.push((p.group, p.id));
+        self.total += mesh.vertices.len();
+        if mesh.vertices.is_empty() {
+            return;
+        }
+        // Depth-pass draws the sides and a truncated volume's far cap, depth-fail both caps
+        // too (the back cap comes first: see `VolumeMesh`).
+        let caps = match p.counting {
+            Counting::ZFail => mesh.cap_vertices,
+            Counting::ZPass if mesh.truncated => mesh.back_cap_vertices,
+            Counting::ZPass => 0,
+        };
+        let mut range = PartRange {
+            group: p.group,
+            piece: p.id,
+            counting: p.counting,
+            model: p.model,
+            first: first as i32,
+            sides: mesh.side_vertices as i32,
+            caps: caps as i32,
+            scissor: p.rect,
+            depth_clip: part_depth_clip(p, lp, choices, fits, stats),
+            depth_bounds: p.depth_range.filter(|_| choices.depth_bounds),
+            elements: None,
+        };
+        let test = ClipTest::new(choices.camera.view_proj * p.model, &range.depth_clip)
+            .filter(|_| choices.cull_clipped && range.drawn());
+        if let Some(test) = test {
+            let start = self.indices.len();
+            let drawn = &mesh.vertices[..mesh.side_vertices + caps];
+            let rejected =
+                test.kept_triangles(drawn, &cached.blocks, first as u32, &mut self.indices);
+            if rejected > 0 {
+                stats.triangles_clipped += rejected;
+                range.elements = Some((start as i32, (self.indices.len() - start) as i32));
+            } else {
+                // Nothing rejected: the vertices drawn as they are.
+                self.indices.truncate(start);
+            }
+        }
+        self.parts.push(range);
+        if !range.drawn() {
+            if range.elements.is_none() {
+                stats.parts_offscreen += 1;
+            }
+            return;
+        }
+        self.drawn += 1;
+        if mesh.truncated {
+            stats.parts_truncated += 1;
+        }
+        if range.depth_clip != [[0.0; 4]; MAX_PLANES] {
+            stats.parts_depth_clipped += 1;
+        }
+        if range.depth_bounds.is_some() {
+            stats.parts_depth_bounded += 1;
+        }
+        self.depth_range = self
+            .depth_range
+            .zip(p.depth_range)
+            .map(|(a, b)| range_union(a, b));
+        self.scissored += p.rect.map_or(1.0, |s| {
+            s.area() as f64 / Scissor::full(choices.camera).area().max(1) as f64
+        });
+        stats.quads += mesh.quads;
+        stats.cap_triangles += caps / 3;
+    }
+
+    /// The stats of the whole layout.
+    fn finish(&self, stats: &mut VolumeStats) {
+        stats.depth_range = self.depth_range;
+        stats.parts_drawn = self.drawn;
+        stats.part_scissor_fraction = if self.drawn == 0 {
+            0.0
+        } else {
+            self.scissored / self.drawn as f64
+        };
     }
 }
 

@@ -26,7 +26,9 @@ pub(super) fn merge(
         .iter()
         .enumerate()
         .filter_map(|(i, p)| match p.id {
-            PieceId::Chunks(c, _) => Some(((p.group, c), i)),
+            // Kept pieces are drawn as built: merged spans change with the camera.
+            PieceId::Chunks(c, _) if !p.kept => Some(((p.group, c), i)),
+            PieceId::Chunks(..) => None,
             PieceId::Component(_) | PieceId::Split { .. } => None,
         })
         .collect();
@@ -82,6 +84,7 @@ pub(super) fn merge(
                 depth_range,
                 subset: None,
                 subset_key: 0,
+                kept: false,
             });
         }
     }
@@ -183,6 +186,8 @@ pub(super) fn plan_pieces(
             depth_range,
             subset,
             subset_key,
+            // Decided with what the light and group were last frame (`mark_kept`).
+            kept: false,
         });
     }
     PlannedPieces {

@@ -25,12 +25,14 @@ pub struct VolumeSettings {
 /// Volume geometry of one component for one light, as triangles of homogeneous vertices.
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct VolumeMesh {
-    /// Side quads (two triangles each), then front-cap triangles, then back-cap triangles.
+    /// Side quads (two triangles each), then back-cap triangles, then front-cap triangles.
     pub vertices: Vec<[f32; 4]>,
     /// Facing triangles left out because their shadow reaches no receiver.
     pub culled: usize,
     pub side_vertices: usize,
+    /// Both caps' vertices, and the back cap's alone (first after the sides).
     pub cap_vertices: usize,
+    pub back_cap_vertices: usize,
     /// Edges extruded.
     pub quads: usize,
     /// Facing triangles (each gives a front and a back cap triangle under depth-fail).
@@ -279,17 +281,12 @@ impl Sides<'_> {
         }
     }
 
-    /// The front cap (the facing triangles, `with_caps`) and the back cap (extruded to the
-    /// reach, flipped); a truncated volume's back cap closes it under depth-pass too.
+    /// The back cap (extruded to the reach, flipped; `with_caps`, or a truncated volume's,
+    /// which closes it under depth-pass too), then the front cap (the facing triangles,
+    /// `with_caps`): what depth-pass draws is the mesh up to the front cap, so one mesh built
+    /// with caps serves either counting.
     fn caps(&self, mesh: &mut VolumeMesh, facing_list: &[u32], with_caps: bool) {
         let tri = |t: u32| self.winding(t).map(|i| self.pos(i));
-        if with_caps {
-            for &t in facing_list {
-                for p in tri(t) {
-                    mesh.vertices.push(to_f32([p.x, p.y, p.z, 1.0]));
-                }
-            }
-        }
         if with_caps || mesh.truncated {
             for &t in facing_list {
                 let [a, b, c] = tri(t);
@@ -297,6 +294,14 @@ impl Sides<'_> {
                 for p in [c, b, a] {
                     mesh.vertices
                         .push(to_f32(extrude(p, self.light, self.s, self.far)));
+                }
+            }
+        }
+        mesh.back_cap_vertices = mesh.vertices.len() - mesh.side_vertices;
+        if with_caps {
+            for &t in facing_list {
+                for p in tri(t) {
+                    mesh.vertices.push(to_f32([p.x, p.y, p.z, 1.0]));
                 }
             }
         }

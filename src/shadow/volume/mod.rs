@@ -60,7 +60,7 @@ pub struct Component {
 
 /// Which piece of a caster group a volume is extruded from: a whole connected component (the
 /// paper's frame) or one chunk of one (the planner's unit, `plan.cull_casters`).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
 pub enum PieceRef {
     Component(usize),
     Chunk(usize),
@@ -406,7 +406,8 @@ mod tests {
             // Finite everywhere, closed by a far cap even without the depth-fail caps, and the
             // far cap just below the floor box.
             assert!(v.vertices.iter().all(|p| p[3] == 1.0));
-            let far = &v.vertices[v.vertices.len() - 3 * v.facing..];
+            let far = &v.vertices[v.side_vertices..v.side_vertices + v.back_cap_vertices];
+            assert_eq!(far.len(), 3 * v.facing);
             assert!(far.iter().all(|p| p[2] < -3.0 && p[2] > -6.0), "{far:?}");
             if !with_caps {
                 assert_eq!(v.cap_vertices, 3 * v.facing);
