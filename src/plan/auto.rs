@@ -109,7 +109,6 @@ pub struct AutoMemory {
     last: HashMap<usize, Candidate>,
 }
 
-/// The option group a candidate's error depends on, as text.
 /// The volume options an error is measured under, less where the volumes are built and how
 /// many are kept (`gpu_extrusion`, `kept_mb`): those change no more than tie pixels at a
 /// volume's edge, and `plan.profile` resolves `gpu_extrusion = auto` inside the frame, after
@@ -121,6 +120,7 @@ fn volume_options(options: &Options) -> crate::options::ShadowVolumeOptions {
     o
 }
 
+/// The option group a candidate's error depends on, as text.
 fn technique_options(candidate: Candidate, options: &Options) -> String {
     match candidate.technique {
         Technique::ShadowMap => {

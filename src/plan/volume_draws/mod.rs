@@ -235,6 +235,15 @@ impl DrawInputs {
     }
 }
 
+/// A hash of a box, bit for bit (receiver boxes in the draws' and parts' keys).
+fn hash_box(b: &Aabb) -> u64 {
+    let mut h = std::hash::DefaultHasher::new();
+    [b.min.to_array(), b.max.to_array()]
+        .map(|a| a.map(f32::to_bits))
+        .hash(&mut h);
+    std::hash::Hasher::finish(&h)
+}
+
 /// A hash of what a light's draws read of its plan.
 fn plan_hash(lp: &LightPlan) -> u64 {
     let mut h = std::hash::DefaultHasher::new();
@@ -249,9 +258,7 @@ fn plan_hash(lp: &LightPlan) -> u64 {
         (v.group, v.piece, v.counting as u8, v.triangles).hash(&mut h);
     }
     for b in &lp.volume_receivers {
-        [b.min.to_array(), b.max.to_array()]
-            .map(|a| a.map(f32::to_bits))
-            .hash(&mut h);
+        hash_box(b).hash(&mut h);
     }
     std::hash::Hasher::finish(&h)
 }
@@ -451,8 +458,10 @@ struct Layout {
     vertex_count: usize,
     /// A hash of the parts' keys in order and their length.
     hash: u64,
-    /// The kept region: its vertices and a hash of its parts' keys in order.
+    /// The kept region: its vertices, its meshes (the first of `order`) and a hash of its
+    /// parts' keys in order.
     kept_vertices: usize,
+    kept_meshes: usize,
     kept_hash: u64,
 }
 
@@ -590,20 +599,20 @@ impl VolumePlanner {
     fn evict(&mut self, budget_mb: f32) {
         let vertex_bytes = std::mem::size_of::<[f32; 4]>();
         let budget = (f64::from(budget_mb) * 1048576.0 / vertex_bytes as f64) as usize;
-        let mut kept: Vec<(u64, usize, (usize, PieceId), usize)> = self
-            .lights
-            .iter()
-            .flat_map(|(&light, lv)| {
+        let kept_parts = || {
+            self.lights.iter().flat_map(|(&light, lv)| {
                 lv.meshes
                     .iter()
                     .filter(|(_, c)| c.kept)
                     .map(move |(&id, c)| (c.used, light, id, c.mesh.vertices.len()))
             })
-            .collect();
-        let mut held: usize = kept.iter().map(|k| k.3).sum();
+        };
+        // Within the budget (every frame but those that fill it) nothing is listed or sorted.
+        let mut held: usize = kept_parts().map(|k| k.3).sum();
         if held <= budget {
             return;
         }
+        let mut kept: Vec<(u64, usize, (usize, PieceId), usize)> = kept_parts().collect();
         kept.sort_unstable_by_key(|k| (k.0, k.1, k.2));
         for (used, light, id, vertices) in kept {
             if held <= budget || used >= self.clock {
@@ -689,43 +698,40 @@ impl RangeReceivers {
                 .map(|m| scene.motion.reach(scene, m))
                 .collect()
         });
-        // A model inside its reach is that box; outside (moved some other way), its surfaces.
-        let mut inside: Vec<Option<bool>> = vec![None; scene.models.len()];
-        for s in scene.surfaces.iter().filter(|s| !is_world(s)) {
-            let crate::scene::SurfaceOwner::Model(m) = s.owner else {
-                continue;
-            };
-            let within = reach
-                .get(m)
-                .copied()
-                .flatten()
-                .filter(|r| r.contains(&s.bounds));
-            match (within, inside.get(m).copied().flatten()) {
-                (Some(_), None) => inside[m] = Some(true),
-                (None, _) => inside[m] = Some(false),
-                _ => {}
-            }
-        }
-        for (m, r) in reach.iter().enumerate() {
-            if let (Some(r), Some(true)) = (r, inside[m])
-                && crate::plan::cull::sphere_meets_aabb(l.position, l.radius, r)
-            {
-                self.boxes.push(*r);
-            }
-        }
-        let models = scene.surfaces.iter().filter(|s| !is_world(s));
-        let not_inside = |s: &&crate::scene::Surface| match s.owner {
-            crate::scene::SurfaceOwner::Model(m) => inside.get(m).copied().flatten() != Some(true),
-            crate::scene::SurfaceOwner::World => false,
+        // A model with surfaces, all inside its reach, is that box; one outside (moved some
+        // other way), its surfaces.
+        let model_of = |s: &crate::scene::Surface| match s.owner {
+            crate::scene::SurfaceOwner::Model(m) => Some(m),
+            crate::scene::SurfaceOwner::World => None,
         };
-        self.boxes
-            .extend(models.filter(not_inside).filter(in_range).map(|s| s.bounds));
+        let (mut has_surfaces, mut strays) = (vec![false; reach.len()], vec![false; reach.len()]);
+        for s in &scene.surfaces {
+            if let Some(m) = model_of(s).filter(|&m| m < reach.len()) {
+                has_surfaces[m] = true;
+                strays[m] |= !reach[m].is_some_and(|r| r.contains(&s.bounds));
+            }
+        }
+        let as_reach = |m: usize| m < reach.len() && has_surfaces[m] && !strays[m];
+        for (m, r) in reach.iter().enumerate() {
+            if let Some(r) = r.filter(|_| as_reach(m))
+                && crate::plan::cull::sphere_meets_aabb(l.position, l.radius, &r)
+            {
+                self.boxes.push(r);
+            }
+        }
+        let by_surfaces = |s: &&crate::scene::Surface| model_of(s).is_some_and(|m| !as_reach(m));
+        self.boxes.extend(
+            scene
+                .surfaces
+                .iter()
+                .filter(by_surfaces)
+                .filter(in_range)
+                .map(|s| s.bounds),
+        );
         let mut h = std::hash::DefaultHasher::new();
         world_key.hash(&mut h);
         for b in &self.boxes[self.world.len()..] {
-            [b.min.to_array(), b.max.to_array()]
-                .map(|a| a.map(f32::to_bits))
-                .hash(&mut h);
+            hash_box(b).hash(&mut h);
         }
         self.hash = std::hash::Hasher::finish(&h);
     }

@@ -3,7 +3,7 @@
 
 use super::{
     CachedPart, FitKey, Layout, LightVolumeDraws, PartRange, Piece, PieceChoices, PieceId,
-    VolumeDraw, VolumeDrawError, VolumeStats, VolumeUpload, settings,
+    VolumeDraw, VolumeDrawError, VolumeStats, VolumeUpload, hash_box, settings,
 };
 use crate::geometry::Aabb;
 use crate::options::ShadowVolumeOptions;
@@ -148,8 +148,10 @@ impl LightVolumeDraws {
         let mut range_local: HashMap<usize, Vec<Aabb>> = HashMap::new();
         for p in pieces {
             let group = &groups.groups[p.group];
+            let base = part_key(light, o, p, &p.model, 0);
+            // A kept part's boxes (of the range) are needed for its key; an unkept part's (in
+            // view) are hashed by index and collected only when it is built.
             let (near, receivers_key) = if p.kept {
-                let base = part_key(light, o, p, &p.model, 0);
                 let unchanged = self.meshes.get(&(p.group, p.id)).is_some_and(|c| {
                     o.caching && c.kept && c.base == base && c.range == self.range.hash
                 });
@@ -169,15 +171,15 @@ impl LightVolumeDraws {
                         .map(|b| b.transformed(&to_local))
                         .collect()
                 });
-                near_boxes(boxes, p, group)
+                let (near, key) = near_boxes(boxes, p, group);
+                (Some(near), key)
             } else {
-                let (boxes, box_hashes) = &local_boxes[&p.group];
-                let near: Vec<Aabb> = p.near.iter().map(|&i| boxes[i as usize]).collect();
+                let box_hashes = &local_boxes[&p.group].1;
                 let mut h = DefaultHasher::new();
                 for &i in &p.near {
                     box_hashes[i as usize].hash(&mut h);
                 }
-                (near, h.finish())
+                (None, h.finish())
             };
             let receivers_key = {
                 let mut h = DefaultHasher::new();
@@ -198,8 +200,11 @@ impl LightVolumeDraws {
                     stats.parts_reused += 1;
                 }
                 _ => {
+                    let near = near.unwrap_or_else(|| {
+                        let boxes = &local_boxes[&p.group].0;
+                        p.near.iter().map(|&i| boxes[i as usize]).collect()
+                    });
                     let part = build_part(group, p, &near, (o, culling, truncate), stats);
-                    let base = part_key(light, o, p, &p.model, 0);
                     self.meshes.insert(
                         (p.group, p.id),
                         CachedPart {
@@ -259,7 +264,7 @@ impl LightVolumeDraws {
                 None => placing.skip(id, cached),
             }
         }
-        let kept_vertices = placing.total;
+        let (kept_vertices, kept_meshes) = (placing.total, placing.order.len());
         kept_vertices.hash(&mut kept_hash);
         let mut others: Vec<_> = pieces.iter().zip(keys).filter(|(p, _)| !p.kept).collect();
         others.sort_by_key(|(p, _)| (p.counting != Counting::ZFail, p.group));
@@ -279,6 +284,7 @@ impl LightVolumeDraws {
             vertex_count: placing.total,
             hash: layout.finish(),
             kept_vertices,
+            kept_meshes,
             kept_hash: kept_hash.finish(),
         }
     }
@@ -308,15 +314,8 @@ impl LightVolumeDraws {
                 allocate: Some(allocate),
             })
         } else if changed {
-            let first_other = layout.order.len()
-                - layout
-                    .order
-                    .iter()
-                    .rev()
-                    .take_while(|id| !self.meshes[*id].kept)
-                    .count();
             Some(VertexUpload {
-                vertices: self.vertices(layout, first_other),
+                vertices: self.vertices(layout, layout.kept_meshes),
                 at: layout.kept_vertices,
                 allocate: None,
             })
@@ -348,9 +347,7 @@ fn near_boxes(boxes: &[Aabb], p: &Piece, group: &volume::CasterGroup) -> (Vec<Aa
         .collect();
     let mut h = DefaultHasher::new();
     for b in &near {
-        [b.min.to_array(), b.max.to_array()]
-            .map(|a| a.map(f32::to_bits))
-            .hash(&mut h);
+        hash_box(b).hash(&mut h);
     }
     (near, h.finish())
 }

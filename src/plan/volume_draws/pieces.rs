@@ -1,7 +1,7 @@
 //! Which pieces a light's volumes are drawn as: each planned part with the receivers its
 //! shadow reaches, its rectangle and depth range, and neighbouring chunks merged.
 
-use super::{Piece, PieceChoices, PieceId, PlannedPieces, VolumeStats};
+use super::{Piece, PieceChoices, PieceId, PlannedPieces, VolumeStats, hash_box};
 use crate::geometry::Aabb;
 use crate::plan::depth_bounds::{DepthRange, EMPTY_RANGE, range_union, window_depth_range};
 use crate::plan::merge::{KeptChunk, merged_spans};
@@ -96,14 +96,6 @@ pub(super) fn merge(
             .map(|(p, _)| p),
     );
     out
-}
-
-fn hash_box(b: &Aabb) -> u64 {
-    let mut h = DefaultHasher::new();
-    [b.min.to_array(), b.max.to_array()]
-        .map(|a| a.map(f32::to_bits))
-        .hash(&mut h);
-    h.finish()
 }
 
 /// The light's receiver boxes that volumes must reach: those the depth does not hide
