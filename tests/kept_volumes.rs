@@ -52,16 +52,34 @@ fn a_still_light_builds_its_world_volumes_once_while_the_camera_walks() {
         "height=240",
         "plan.profile=gpu",
     ];
-    for keep in [true, false] {
+    for (keep, ahead) in [(true, false), (true, true), (false, false)] {
         let options = options_with(&[&gpu[..], &[&format!("plan.keep_volumes={keep}")]].concat());
         let (_ctx, mut r) = common::gl_on(shadowlab::options::BackendChoice::Egl, &options);
         r.load_scene(&scene).unwrap();
+        scene.pose_at(0.0);
+        let prepared = if ahead {
+            r.prepare(&scene, &options).unwrap()
+        } else {
+            Default::default()
+        };
         // 100 frames of walking, then the same 100 again: the still lights have seen every
         // piece they draw there once already.
         let first = still_lights_parts(&mut r, &mut scene, &keys, &options, 0..100);
         let again = still_lights_parts(&mut r, &mut scene, &keys, &options, 0..100);
-        println!("keep_volumes={keep}: built, reused {first:?} then {again:?}");
-        assert!(first.0 > 0 && again.1 > 0, "{first:?} {again:?}");
+        println!("keep_volumes={keep}, ahead {prepared:?}: built, reused {first:?} then {again:?}");
+        assert!(again.1 > 0, "{first:?} {again:?}");
+        if ahead {
+            // Built before the first frame: the walk's first sights build nothing.
+            let moving = scene.motion.lights.len();
+            assert_eq!(prepared.lights, scene.lights.len() - moving, "{prepared:?}");
+            assert!(prepared.volume_parts > 0, "{prepared:?}");
+            assert_eq!(
+                first.0, 0,
+                "built on first sight though built ahead: {first:?}"
+            );
+        } else {
+            assert!(first.0 > 0, "{first:?}");
+        }
         if keep {
             assert_eq!(again.0, 0, "kept parts built again: {again:?}");
         } else {
@@ -89,18 +107,38 @@ fn under_the_gpu_profile_the_masks_equal_those_of_a_renderer_with_every_cache_of
     ] {
         fresh.set_assignment(set).unwrap();
     }
-    let (_ctx, mut a) = common::gl_on(shadowlab::options::BackendChoice::Egl, &cached);
-    let mut b = a.sibling(cached.width, cached.height).unwrap();
-    a.load_scene(&scene).unwrap();
+    let (_ctx, mut first_sight) = common::gl_on(shadowlab::options::BackendChoice::Egl, &cached);
+    let mut b = first_sight.sibling(cached.width, cached.height).unwrap();
+    // Kept parts built on first sight, and built ahead (`Renderer::prepare`).
+    let mut ahead = first_sight.sibling(cached.width, cached.height).unwrap();
+    first_sight.load_scene(&scene).unwrap();
+    ahead.load_scene(&scene).unwrap();
+    scene.pose_at(0.0);
+    let prepared = ahead.prepare(&scene, &cached).unwrap();
+    assert!(prepared.volume_parts > 0, "{prepared:?}");
+    for a in [&mut first_sight, &mut ahead] {
+        masks_along_the_walk(a, &mut b, &mut scene, &keys, (&cached, &fresh));
+    }
+}
+
+/// Compares `a`'s masks with `b`'s, which forgets everything before each frame, along the
+/// first 60 frames of the walk.
+fn masks_along_the_walk(
+    a: &mut Renderer,
+    b: &mut Renderer,
+    scene: &mut Scene,
+    keys: &[PathKey],
+    (cached, fresh): (&Options, &Options),
+) {
     let (mut compared, mut kept_reused, mut extruded) = (0, 0, 0);
     for i in (0..6).chain((6..60).step_by(6)) {
         scene.pose_at(i as f64 / FRAME_RATE_HZ);
         let camera = keys[i].apply(&scene.camera);
         // The reference renderer forgets everything before each frame.
         let (fa, n) = common::cached_against_fresh(
-            (&mut a, &mut b),
-            (&scene, &camera),
-            (&cached, &fresh),
+            (&mut *a, &mut *b),
+            (&*scene, &camera),
+            (cached, fresh),
             &format!("frame {i}"),
         );
         compared += n;

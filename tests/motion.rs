@@ -540,3 +540,30 @@ fn ten_thousand_frames_in_motion_stay_flat() {
         );
     }
 }
+
+/// A running player reposed builds its own caster group again and shares every other: the
+/// world's (the scene's largest) is not copied frame after frame.
+#[test]
+fn reposing_a_player_builds_its_group_and_shares_the_worlds() {
+    let (mut scene, _, _) = load_scene_file("oa_dm1");
+    let mut planner = shadowlab::plan::planner::Planner::default();
+    scene.pose_at(0.0);
+    let before = planner.casters(&scene);
+    scene.pose_at(0.25);
+    let after = planner.casters(&scene);
+    assert_eq!(planner.take_groups_rebuilt(), before.groups.len() + 1);
+    let (mut shared, mut rebuilt) = (0, 0);
+    for (a, b) in before.groups.iter().zip(&after.groups) {
+        match a.owner {
+            shadowlab::scene::SurfaceOwner::World => {
+                assert!(std::sync::Arc::ptr_eq(a, b), "the world's group was copied");
+                shared += 1;
+            }
+            shadowlab::scene::SurfaceOwner::Model(_) => {
+                assert_ne!(a.pose, b.pose);
+                rebuilt += 1;
+            }
+        }
+    }
+    assert_eq!((shared, rebuilt), (1, 1));
+}

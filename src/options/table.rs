@@ -251,6 +251,12 @@ define_options! {
         /// the camera nor the counting rebuilds them; a moving model counts as the box its
         /// motion keeps it in. Off: built against the receivers in view, as the camera moves.
         keep_volumes: bool = true;
+        /// With `keep_volumes`, build each still shadow-volume light's kept pieces for its
+        /// whole range before the first frame (`Renderer::prepare`, which `bench` and the
+        /// viewer call after loading a scene), nearest lights to the camera first, until
+        /// `shadow_volume.kept_mb` is reached, and upload them: the first sight of a room then
+        /// builds nothing. Off: each piece is built the first time a frame draws it.
+        build_ahead: bool = true;
         /// Leave out of each depth-clipped part's stencil draw the triangles one of its clip
         /// planes rejects wholly (tested on the CPU, a block of triangles at a time where its
         /// box decides, the rest drawn through an index list): the GL would clip them away,

@@ -11,7 +11,7 @@ use super::auto::{AutoMemory, CostSource};
 use super::kept_frusta::KeptFrusta;
 use super::occlusion::DepthPyramid;
 use super::pass::PassTime;
-use super::volume_draws::{LightVolumeDraws, PieceChoices, VolumeDrawError, VolumePlanner};
+use super::volume_draws::{Ahead, LightVolumeDraws, PieceChoices, VolumeDrawError, VolumePlanner};
 use super::{CameraSetup, LightPlan};
 use crate::options::{Candidate, Options};
 use crate::scene::{Camera, Scene};
@@ -259,13 +259,61 @@ impl Planner {
             .prepare(scene, &groups, lp, &options.shadow_volume, choices)
     }
 
-    /// Forgets the light's volume draws (their upload failed): the next frame makes them
-    /// afresh.
     /// Volume parts and depth fits kept for later frames.
     pub fn held_volumes(&self) -> (usize, usize) {
         self.volumes.held()
     }
 
+    /// Builds ahead the kept volumes of every still light that runs shadow volumes
+    /// (`plan.build_ahead` with `plan.keep_volumes`; `options` resolved for the GL as a
+    /// frame's are), nearest to `camera` first, while the kept parts stay within
+    /// `shadow_volume.kept_mb`. Each light's draws then hold the upload of its kept region
+    /// ([`Planner::last_volume_draws`]; [`Planner::uploaded`] once made).
+    pub fn prepare_ahead(
+        &mut self,
+        scene: &Scene,
+        camera: &Camera,
+        options: &Options,
+    ) -> Vec<Ahead> {
+        let p = &options.plan;
+        if !(p.enabled && p.keep_volumes && p.cull_casters && p.build_ahead) {
+            return Vec::new();
+        }
+        let mut lights: Vec<usize> = (0..scene.lights.len())
+            .filter(|&l| options.light_enabled(l) && options.technique_for(l).uses_volumes())
+            .filter(|&l| !scene.motion.moves_light(l))
+            .collect();
+        if lights.is_empty() {
+            return Vec::new();
+        }
+        let from = |l: &usize| scene.lights[*l].position.distance_squared(camera.position);
+        lights.sort_by(|a, b| from(a).total_cmp(&from(b)));
+        let groups = self.casters(scene);
+        let vertex_bytes = std::mem::size_of::<[f32; 4]>() as f64;
+        let budget = (f64::from(options.shadow_volume.kept_mb) * 1048576.0 / vertex_bytes) as usize;
+        let truncate = p.truncate_volumes;
+        let mut made = Vec::new();
+        for light in lights {
+            let ahead =
+                self.volumes
+                    .prepare_ahead(scene, &groups, light, &options.shadow_volume, truncate);
+            if self.volumes.kept_vertices() > budget {
+                // Past the budget: this light is built when first seen, as without building ahead.
+                self.volumes.forget_light(light);
+                break;
+            }
+            made.push(ahead);
+        }
+        made
+    }
+
+    /// The upload [`Planner::prepare_ahead`] readied for the light was made.
+    pub fn uploaded(&mut self, light: usize) {
+        self.volumes.uploaded(light);
+    }
+
+    /// Forgets the light's volume draws (their upload failed): the next frame makes them
+    /// afresh.
     pub fn forget_volume_draws(&mut self, light: usize) {
         self.volumes.forget_light(light);
     }

@@ -17,6 +17,7 @@ use crate::gl::syncs::{self, Fence};
 use crate::images::Rgba;
 use crate::options::{Options, Technique};
 use crate::plan::auto::{AutoMemory, CostSource};
+use crate::plan::fallback::Fallback;
 use crate::plan::pass::{PassId, Stage};
 use crate::plan::planner::{DepthNeed, Planner};
 use crate::plan::settings::PassSettings;
@@ -39,6 +40,17 @@ pub struct Held {
     pub volume_parts: usize,
     /// Depth-pass parts' clip planes fitted to the last depth buffer.
     pub depth_fits: usize,
+}
+
+/// What [`Renderer::prepare`] readied.
+#[derive(Debug, Clone, Copy, Default, PartialEq, serde::Serialize)]
+pub struct Prepared {
+    /// Lights whose kept volumes were built ahead, their parts and vertices.
+    pub lights: usize,
+    pub volume_parts: usize,
+    pub volume_vertices: usize,
+    /// Wall time, building and uploading.
+    pub ms: f64,
 }
 
 /// Plans and draws frames: the planner and what it keeps across frames (costs for `auto`,
@@ -126,6 +138,39 @@ impl Renderer {
         Ok(())
     }
 
+    /// Readies what later frames of `scene` (the loaded one) with `options` would otherwise
+    /// make the first time they need it: the kept volumes of still shadow-volume lights
+    /// (`plan.build_ahead`), built and uploaded. Call it after [`Renderer::load_scene`]; a
+    /// frame without it builds each piece when it first draws it.
+    pub fn prepare(&mut self, scene: &Scene, options: &Options) -> Result<Prepared, RenderError> {
+        let start = Instant::now();
+        let options = &self.resolve(options)?.0;
+        let lights = self.planner.prepare_ahead(scene, &scene.camera, options);
+        for a in &lights {
+            if let Some(v) = self.planner.last_volume_draws(a.light)
+                && let Err(e) = self.drawer.upload_volume_buffers(v)
+            {
+                self.planner.forget_volume_draws(a.light);
+                return Err(e);
+            }
+            self.planner.uploaded(a.light);
+        }
+        Ok(Prepared {
+            lights: lights.len(),
+            volume_parts: lights.iter().map(|a| a.parts).sum(),
+            volume_vertices: lights.iter().map(|a| a.vertices).sum(),
+            ms: start.elapsed().as_secs_f64() * 1e3,
+        })
+    }
+
+    /// `options` as a frame on this GL runs them: the fixed-function choices its GL lacks
+    /// replaced (with what was replaced), the profile resolved.
+    fn resolve(&self, options: &Options) -> Result<(Options, Vec<Fallback>), RenderError> {
+        let caps = self.caps_for(options)?;
+        let (options, fallbacks) = fixed_function::resolve_all(options, |f| caps.has(f));
+        Ok((profile::resolve(options, caps.is_software()), fallbacks))
+    }
+
     /// Plans and renders one frame of `scene` (which must be the loaded one).
     pub fn render(&mut self, scene: &Scene, options: &Options) -> Result<Frame, RenderError> {
         self.render_with(scene, options, FrameRequest::default())
@@ -151,9 +196,9 @@ impl Renderer {
         request: FrameRequest,
     ) -> Result<Frame, RenderError> {
         let (before, start) = (syncs::counted(), Instant::now());
+        let (options, fallbacks) = self.resolve(options)?;
+        let options = &options;
         let caps = self.caps_for(options)?;
-        let (options, fallbacks) = fixed_function::resolve_all(options, |f| caps.has(f));
-        let options = &profile::resolve(options, caps.is_software());
         let settings = PassSettings::of(options);
         if settings.fixed_function && !self.drawer.has_legacy() {
             return Err(RenderError::Unsupported(

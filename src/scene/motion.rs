@@ -343,6 +343,11 @@ pub struct LightMotion {
 }
 
 impl LightMotion {
+    /// Whether the light changes place (orbit, route); a flickering one only dims.
+    pub fn moves(&self) -> bool {
+        !matches!(self.path, LightPath::Flicker { .. })
+    }
+
     /// The light's position at `t`, or None where it does not move.
     pub fn position(&self, t: f64) -> Option<Vec3> {
         match &self.path {
@@ -403,6 +408,11 @@ pub struct Posed {
 }
 
 impl Motion {
+    /// Whether light `light` changes place (an orbit or a route; a flicker only dims it).
+    pub fn moves_light(&self, light: usize) -> bool {
+        self.lights.iter().any(|m| m.light == light && m.moves())
+    }
+
     /// Where model `model` may be while the motion plays: a world box holding it in every
     /// pose (its walk's route grown by its reach about its origin, or that reach about where
     /// it stands). None for a model the motion does not move. What is built against every

@@ -109,6 +109,7 @@ impl App {
         let gl = Arc::new(gl);
         let mut renderer = Renderer::new(gl.clone(), w.max(16), h.max(16))?;
         renderer.load_scene(&settings.scene)?;
+        renderer.prepare(&settings.scene, &settings.options)?;
         let egui = egui_glow::EguiGlow::new(event_loop, gl.clone(), None, None, true);
         let _ = window.set_vsync(true);
         self.state = Some(ViewerState::new(
@@ -201,6 +202,7 @@ impl Running {
         state.advance_motion(motion_dt, 0);
         if state.needs_upload {
             self.renderer.load_scene(&state.scene)?;
+            self.renderer.prepare(&state.scene, &state.options)?;
             state.live_error.reset();
             state.needs_upload = false;
         }

@@ -306,6 +306,17 @@ impl Drawer {
         Ok(())
     }
 
+    /// Uploads what a light's volume draws hold for upload, outside a frame
+    /// (`Renderer::prepare`).
+    pub(crate) fn upload_volume_buffers(
+        &mut self,
+        draws: &crate::plan::volume_draws::LightVolumeDraws,
+    ) -> Result<(), RenderError> {
+        self.volume_buffers
+            .upload(&self.gl, draws)
+            .map_err(RenderError::Gl)
+    }
+
     /// A frame of `width`×`height`, with storage of at least `alloc` and 32F depth if asked.
     fn ensure_target(
         &mut self,

@@ -381,10 +381,7 @@ impl FrameFacts<'_> {
         let o = &self.map_options;
         let fbo = crate::plan::fallback::disabled(self.options)
             .is_ok_and(|d| !d.contains(&"render_to_depth_texture"));
-        let moves = self.scene.motion.lights.iter().any(|m| {
-            m.light == plan.light
-                && !matches!(m.path, crate::scene::motion::LightPath::Flicker { .. })
-        });
+        let moves = self.scene.motion.moves_light(plan.light);
         self.on()
             && self.options.plan.cache_maps
             && plan.buffer == MapBuffer::Depth

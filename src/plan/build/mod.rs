@@ -272,7 +272,7 @@ impl<'a> FrameFacts<'a> {
         let groups = groups.filter(|_| Plan::needs_casters(scene, options));
         let pieces: Vec<PieceCandidate> = groups
             .iter()
-            .flat_map(|g| g.groups.iter().enumerate())
+            .flat_map(|g| g.groups.iter().map(|g| &**g).enumerate())
             .flat_map(|(gi, g)| {
                 let t = volume::group_transform(scene, g.owner);
                 let pieces = if chunked { &g.chunks } else { &g.components };

@@ -74,11 +74,14 @@ impl FrameFacts<'_> {
             let keep = match on && p.cull_casters {
                 // Unculled, every piece; the world's only when some model may be shadowed.
                 false => !(world_for_models && model_boxes.is_empty()),
+                // The range test first: most pieces of a map are out of a light's range, and
+                // it is cheaper than their shadow's box.
                 true => {
-                    let shadow = cull::shadow_bounds(&bounds, l.position, l.radius);
-                    cull::sphere_meets_aabb(l.position, l.radius, &bounds)
-                        && self.view_frustum.intersects_aabb(&shadow)
-                        && boxes.iter().any(|r| r.intersects(&shadow))
+                    cull::sphere_meets_aabb(l.position, l.radius, &bounds) && {
+                        let shadow = cull::shadow_bounds(&bounds, l.position, l.radius);
+                        self.view_frustum.intersects_aabb(&shadow)
+                            && boxes.iter().any(|r| r.intersects(&shadow))
+                    }
                 }
             };
             if !keep {
@@ -122,10 +125,7 @@ impl FrameFacts<'_> {
     /// are drawn too, and no per-piece test says depth-pass is safe for them).
     fn hand_to_gpu(&self, plan: &mut LightPlan) {
         let o = &self.options;
-        let light_moves = self.scene.motion.lights.iter().any(|m| {
-            m.light == plan.light
-                && !matches!(m.path, crate::scene::motion::LightPath::Flicker { .. })
-        });
+        let light_moves = self.scene.motion.moves_light(plan.light);
         let gpu = |owner: SurfaceOwner| match o.shadow_volume.gpu_extrusion {
             // `auto` is resolved by the profile before planning; unresolved, the CPU builds.
             GpuExtrusion::None | GpuExtrusion::Auto => false,

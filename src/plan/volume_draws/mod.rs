@@ -19,8 +19,11 @@
 //!   parts (its triangles near the near plane, depth-fail; the rest, depth-pass);
 //! - a **draw** is one draw call of the stencil pass over consecutive parts.
 
+mod ahead;
 mod parts;
 mod pieces;
+
+pub use ahead::Ahead;
 
 use parts::{check_bounds, draws_of};
 use pieces::{merge, plan_pieces, visible_receivers};

@@ -248,24 +248,15 @@ impl LightVolumeDraws {
             .filter(|(_, p)| p.kept)
             .map(|(i, p)| ((p.group, p.id), i))
             .collect();
-        let mut kept: Vec<(usize, PieceId)> = self
-            .meshes
-            .iter()
-            .filter(|(_, c)| c.kept)
-            .map(|(k, _)| *k)
-            .collect();
-        kept.sort_unstable();
-        let mut kept_hash = DefaultHasher::new();
-        for id in kept {
-            let cached = &self.meshes[&id];
-            cached.key.hash(&mut kept_hash);
-            match planned_kept.get(&id) {
+        let kept = self.kept_region();
+        for id in &kept.meshes {
+            let cached = &self.meshes[id];
+            match planned_kept.get(id) {
                 Some(&i) => placing.place(&pieces[i], cached, lp, choices, fits, stats),
-                None => placing.skip(id, cached),
+                None => placing.skip(*id, cached),
             }
         }
         let (kept_vertices, kept_meshes) = (placing.total, placing.order.len());
-        kept_vertices.hash(&mut kept_hash);
         let mut others: Vec<_> = pieces.iter().zip(keys).filter(|(p, _)| !p.kept).collect();
         others.sort_by_key(|(p, _)| (p.counting != Counting::ZFail, p.group));
         let mut layout = DefaultHasher::new();
@@ -275,7 +266,7 @@ impl LightVolumeDraws {
             placing.place(p, cached, lp, choices, fits, stats);
         }
         placing.total.hash(&mut layout);
-        kept_hash.finish().hash(&mut layout);
+        kept.hash.hash(&mut layout);
         placing.finish(stats);
         Layout {
             parts: placing.parts,
@@ -285,7 +276,32 @@ impl LightVolumeDraws {
             hash: layout.finish(),
             kept_vertices,
             kept_meshes,
-            kept_hash: kept_hash.finish(),
+            kept_hash: kept.hash,
+        }
+    }
+
+    /// The kept meshes in buffer order (a fixed one: by group and piece), with a hash of their
+    /// keys in that order and their vertices.
+    pub(super) fn kept_region(&self) -> KeptRegion {
+        let mut meshes: Vec<(usize, PieceId)> = self
+            .meshes
+            .iter()
+            .filter(|(_, c)| c.kept)
+            .map(|(k, _)| *k)
+            .collect();
+        meshes.sort_unstable();
+        let mut h = DefaultHasher::new();
+        let mut vertices = 0;
+        for id in &meshes {
+            let cached = &self.meshes[id];
+            cached.key.hash(&mut h);
+            vertices += cached.mesh.vertices.len();
+        }
+        vertices.hash(&mut h);
+        KeptRegion {
+            meshes,
+            vertices,
+            hash: h.finish(),
         }
     }
 
@@ -306,7 +322,7 @@ impl LightVolumeDraws {
         let kept_same = layout.kept_hash == self.kept_layout;
         let changed = layout.hash != self.layout || rebuilt;
         let upload = if !kept_same || layout.vertex_count > self.capacity {
-            let allocate = layout.vertex_count + layout.vertex_count / 4 + 1024;
+            let allocate = with_headroom(layout.vertex_count);
             self.capacity = allocate;
             Some(VertexUpload {
                 vertices: self.vertices(layout, 0),
@@ -326,6 +342,19 @@ impl LightVolumeDraws {
         self.layout = layout.hash;
         upload
     }
+}
+
+/// The vertices a light's buffer is allocated for when it must hold `vertices`: room to grow,
+/// so that a kept part seen for the first time does not reallocate it every frame.
+pub(super) fn with_headroom(vertices: usize) -> usize {
+    vertices + vertices / 4 + 1024
+}
+
+/// The kept region of a light's buffer (see [`LightVolumeDraws::kept_region`]).
+pub(super) struct KeptRegion {
+    pub meshes: Vec<(usize, PieceId)>,
+    pub vertices: usize,
+    pub hash: u64,
 }
 
 /// What [`LightVolumeDraws::upload_for`] decides: vertices written from vertex `at` on, the

@@ -124,17 +124,14 @@ pub(super) fn plan_pieces(
     receivers: &[Aabb],
     choices: &PieceChoices,
 ) -> PlannedPieces {
-    let light_world = scene.lights[lp.light].position;
-    let radius = scene.lights[lp.light].radius;
     // Without receiver boxes (no caster culling) every part is built whole.
     let culling = !lp.volume_receivers.is_empty();
     let mut local_boxes: HashMap<usize, (Vec<Aabb>, Vec<u64>)> = HashMap::new();
     let mut pieces: Vec<Piece> = Vec::with_capacity(lp.volumes.len());
     for p in &lp.volumes {
         let group = &groups.groups[p.group];
-        let model = volume::group_transform(scene, group.owner);
+        let (model, light_local, local_radius) = light_in_group(scene, group, lp.light);
         let to_local = model.inverse();
-        let light_local = to_local.transform_point3(light_world);
         let whole = group.piece(p.piece);
         let (id, subset, subset_key) = piece_triangles(lp, p, group, whole);
         let piece = subset.as_ref().unwrap_or(whole);
@@ -143,12 +140,6 @@ pub(super) fn plan_pieces(
             let hashes = boxes.iter().map(hash_box).collect();
             (boxes, hashes)
         });
-        // The range in the group's space (a scaled model stretches it).
-        let stretch = [to_local.x_axis, to_local.y_axis, to_local.z_axis]
-            .iter()
-            .map(|a| a.truncate().length())
-            .fold(0.0f32, f32::max);
-        let local_radius = radius * stretch.max(1e-6);
         // The part depends only on the receivers its shadow can reach: a moving receiver
         // rebuilds the parts that shadow it, not the light's whole volume.
         let piece_shadow = volume::shadow_bounds(&piece.bounds, light_local, local_radius);
@@ -186,6 +177,24 @@ pub(super) fn plan_pieces(
         pieces,
         local_boxes,
     }
+}
+
+/// The group's transform, and the light and its range in the group's space (a scaled model
+/// stretches the range).
+pub(super) fn light_in_group(
+    scene: &Scene,
+    group: &volume::CasterGroup,
+    light: usize,
+) -> (Mat4, glam::Vec3, f32) {
+    let l = &scene.lights[light];
+    let model = volume::group_transform(scene, group.owner);
+    let to_local = model.inverse();
+    let stretch = [to_local.x_axis, to_local.y_axis, to_local.z_axis]
+        .iter()
+        .map(|a| a.truncate().length())
+        .fold(0.0f32, f32::max);
+    let local_radius = l.radius * stretch.max(1e-6);
+    (model, to_local.transform_point3(l.position), local_radius)
 }
 
 /// Which triangles a planned part holds: its id, the subset of a split part (None: those the

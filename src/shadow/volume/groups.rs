@@ -248,7 +248,7 @@ impl CasterGroups {
         CasterGroups {
             groups: owners
                 .into_iter()
-                .map(|o| CasterGroup::of_owner(scene, o))
+                .map(|o| std::sync::Arc::new(CasterGroup::of_owner(scene, o)))
                 .collect(),
         }
     }
@@ -263,7 +263,7 @@ impl CasterGroups {
             .map(|g| match g.owner {
                 SurfaceOwner::Model(m) if scene.models.get(m).is_some_and(|i| i.pose != g.pose) => {
                     rebuilt += 1;
-                    CasterGroup::of_owner(scene, g.owner)
+                    std::sync::Arc::new(CasterGroup::of_owner(scene, g.owner))
                 }
                 _ => g.clone(),
             })

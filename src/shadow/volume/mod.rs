@@ -94,10 +94,11 @@ pub struct ChunkNode {
     pub end: usize,
 }
 
-/// Every caster group of a scene, built once per scene.
+/// Every caster group of a scene, built once per scene. Shared, so that reposing a model
+/// builds its own group and copies no other (the world's is the scene's largest).
 #[derive(Debug, Clone, Default)]
 pub struct CasterGroups {
-    pub groups: Vec<CasterGroup>,
+    pub groups: Vec<std::sync::Arc<CasterGroup>>,
 }
 
 /// A group's transform to world space.

@@ -16,7 +16,7 @@ use crate::plan::fallback::Fallback;
 use crate::plan::volume_draws::VolumeStats;
 use crate::presets::{Difference, Preset};
 use crate::report::estimate::{gbuffer_of, render_sampled};
-use crate::run::{FrameRequest, RenderError, Renderer};
+use crate::run::{FrameRequest, Prepared, RenderError, Renderer};
 use crate::scene::Scene;
 use crate::scene::path::PathKey;
 use crate::truth::sampled::{FrameSample, Interval};
@@ -25,6 +25,11 @@ use indicatif::{ProgressBar, ProgressStyle};
 use serde::Serialize;
 use std::collections::{BTreeMap, HashMap};
 use std::time::Instant;
+
+mod stats;
+
+pub use stats::{Median, MsStats};
+use stats::{frame_ratios, median, stats};
 
 /// Frames timed pass by pass for each configuration's breakdown (after its measured frames).
 pub const PASS_FRAMES: usize = 3;
@@ -130,78 +135,6 @@ pub fn sweep_configs(
     Ok(configs)
 }
 
-/// Frame times of the measured frames: median, spread and the tail a person sees as stutter.
-#[derive(Debug, Clone, Copy, Default, PartialEq, Serialize)]
-pub struct MsStats {
-    pub median: f64,
-    pub min: f64,
-    pub max: f64,
-    /// 95th and 99th percentiles (nearest rank: the smallest time at least that share of
-    /// frames do not exceed).
-    pub p95: f64,
-    pub p99: f64,
-}
-
-impl MsStats {
-    /// The 99th percentile over the median (1 for perfectly even frames).
-    pub fn p99_over_median(&self) -> f64 {
-        if self.median > 0.0 {
-            self.p99 / self.median
-        } else {
-            0.0
-        }
-    }
-}
-
-/// Nearest-rank percentile `q` (0..=1) of sorted `v`.
-fn percentile(sorted: &[f64], q: f64) -> f64 {
-    if sorted.is_empty() {
-        return 0.0;
-    }
-    let rank = (q * sorted.len() as f64).ceil() as usize;
-    sorted[rank.clamp(1, sorted.len()) - 1]
-}
-
-#[derive(Debug, Clone, Copy, Default, PartialEq, Serialize)]
-pub struct Median {
-    pub median: f64,
-}
-
-fn median(v: &mut [f64]) -> f64 {
-    if v.is_empty() {
-        return 0.0;
-    }
-    v.sort_by(|a, b| a.total_cmp(b));
-    let n = v.len();
-    if n % 2 == 1 {
-        v[n / 2]
-    } else {
-        0.5 * (v[n / 2 - 1] + v[n / 2])
-    }
-}
-
-fn stats(v: &[f64]) -> MsStats {
-    let mut s = v.to_vec();
-    MsStats {
-        median: median(&mut s),
-        min: s.first().copied().unwrap_or(0.0),
-        max: s.last().copied().unwrap_or(0.0),
-        p95: percentile(&s, 0.95),
-        p99: percentile(&s, 0.99),
-    }
-}
-
-/// Each frame's time over the shadows-off frame at the same path frame (`off_ms[i]` beside
-/// `frame_ms[i]`, both indexed by path frame); a frame without a positive baseline counts 0.
-fn frame_ratios(frame_ms: &[f64], off_ms: &[f64]) -> Vec<f64> {
-    debug_assert_eq!(frame_ms.len(), off_ms.len());
-    frame_ms
-        .iter()
-        .zip(off_ms)
-        .map(|(ms, off)| if *off > 0.0 { ms / off } else { 0.0 })
-        .collect()
-}
-
 /// Error against the exact reference, as fractions of receiver pixels.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Serialize)]
 pub struct ErrorRow {
@@ -257,6 +190,9 @@ pub struct BenchRow {
     /// builds, GPU extrusion meshes: `Frame::own_ms`), with its spread and tail: what bounds
     /// the frame rate on a GPU however fast it draws.
     pub own_ms: MsStats,
+    /// What was readied before the first frame, untimed (`plan.build_ahead`: lights whose
+    /// kept volumes were built ahead, with their parts, vertices and milliseconds).
+    pub prepared: Prepared,
     /// Milliseconds per frame with up to two frames in flight (throughput): the path drawn
     /// again back to back, bench waiting only for the frame before the one just sent.
     pub pipelined_ms: f64,
@@ -403,6 +339,8 @@ struct Measured {
     syncs: SyncsPerFrame,
     passes: BTreeMap<String, Vec<f64>>,
     clock: &'static str,
+    /// What was readied before the warm-up frames (`Renderer::prepare`).
+    prepared: Prepared,
 }
 
 /// Where the timed frames waited for the GPU ([`Syncs`]), per frame on average.
@@ -609,6 +547,7 @@ fn pass_breakdown(
         syncs: SyncsPerFrame::mean(&syncs),
         passes: BTreeMap::new(),
         clock: "cpu",
+        prepared: Prepared::default(),
     };
     let frames = if settings.breakdown {
         settings.frames.clamp(1, PASS_FRAMES)
@@ -684,6 +623,7 @@ impl<'a> Bench<'a> {
     fn measure(&mut self, options: &Options) -> Result<Measured, RenderError> {
         let (scene, settings) = (&mut self.scene, &self.settings);
         settings.pose(scene, 0);
+        let prepared = self.renderer.prepare(scene, options)?;
         for _ in 0..settings.warmup {
             let camera = settings.camera(scene, 0);
             self.renderer
@@ -695,7 +635,9 @@ impl<'a> Bench<'a> {
             let camera = settings.camera(scene, i);
             timed.push(time_frame(self.renderer, scene, &camera, options)?);
         }
-        pass_breakdown(self.renderer, scene, settings, options, &timed)
+        let mut m = pass_breakdown(self.renderer, scene, settings, options, &timed)?;
+        m.prepared = prepared;
+        Ok(m)
     }
 
     /// Every configuration and every baseline they need, each on a renderer of its own sharing
@@ -722,11 +664,13 @@ impl<'a> Bench<'a> {
         }
         bar.set_message(format!("{} option sets, round-robin", timed.len()));
         let mut renderers = Vec::with_capacity(timed.len());
+        let mut prepared = Vec::with_capacity(timed.len());
         settings.pose(scene, 0);
         let first = settings.camera(scene, 0);
         for (_, o) in &timed {
             let mut r = self.renderer.sibling(o.width, o.height)?;
             r.load_scene(scene)?;
+            prepared.push(r.prepare(scene, o)?);
             for _ in 0..settings.warmup {
                 r.render_at(scene, &first, o, FrameRequest::default())?;
             }
@@ -743,8 +687,15 @@ impl<'a> Bench<'a> {
             }
         }
         let mut out = HashMap::new();
-        for (((key, o), r), f) in timed.into_iter().zip(&mut renderers).zip(&frames) {
-            out.insert(key, pass_breakdown(r, scene, settings, &o, f)?);
+        for ((((key, o), r), f), p) in timed
+            .into_iter()
+            .zip(&mut renderers)
+            .zip(&frames)
+            .zip(prepared)
+        {
+            let mut m = pass_breakdown(r, scene, settings, &o, f)?;
+            m.prepared = p;
+            out.insert(key, m);
         }
         Ok(out)
     }
@@ -962,6 +913,7 @@ impl<'a> Bench<'a> {
                 },
                 cpu_ms,
                 own_ms: stats(&m.own_ms),
+                prepared: m.prepared,
                 pipelined_ms: m.pipelined_ms,
                 shadows_off_frame_ms: Median { median: off_ms },
                 ratio_to_shadows_off: if off_ms > 0.0 {
@@ -1023,6 +975,7 @@ pub(crate) fn test_row(technique: &str, label: &str, ms: f64, error: f64) -> Ben
         submit_ms: Median { median: ms },
         cpu_ms: MsStats::default(),
         own_ms: MsStats::default(),
+        prepared: Prepared::default(),
         pipelined_ms: ms,
         shadows_off_frame_ms: Median { median: 1.0 },
         ratio_to_shadows_off: ms,
