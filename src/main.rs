@@ -31,6 +31,9 @@ enum Command {
     Tune(commands::tune::Args),
     /// Check maps of a data set: both techniques, planner on and off, against the reference.
     Check(commands::check::Args),
+    /// Join the parts of a sharded run (`check --shard K/N --out DIR`) into what one run
+    /// writes.
+    Merge(commands::merge::Args),
     /// Record a flythrough: a camera walking through a scene's map, as a path file.
     Flythrough(commands::flythrough::Args),
     /// Subdivide each light's receivers into lit and shadowed fragments (Vector's light-volume
@@ -58,6 +61,7 @@ fn main() {
         Command::Bench(a) => commands::bench::run(&cli.common, &a),
         Command::Tune(a) => commands::tune::run(&cli.common, &a),
         Command::Check(a) => commands::check::run(&cli.common, &a),
+        Command::Merge(a) => commands::merge::run(&a),
         Command::Reproduce(a) => commands::reproduce::run(&cli.common, &a),
         #[cfg(feature = "window")]
         Command::View(a) => commands::view::run(&cli.common, &a),

@@ -1,12 +1,15 @@
 //! `shadowlab check`: every map of a data set (or one) loaded, rendered from its first spawn
 //! point under shadow maps and shadow volumes, planner on and off, and measured against the
-//! exact reference; one JSON line per map on stdout, progress on stderr.
+//! exact reference; one JSON line per map on stdout, progress on stderr. `--shard K/N` checks
+//! every N-th map from the K-th, and `--out DIR` keeps the lines with a manifest for
+//! `shadowlab merge` (docs/shards.md).
 
 use super::{CommonArgs, scene_options, start_gl};
 use anyhow::{Result, bail};
 use shadowlab::options::{OptionValue, Technique};
 use shadowlab::q3::pk3::Vfs;
 use shadowlab::report::check::{MapCheck, check_map};
+use shadowlab::report::shard::{Manifest, Shard};
 use std::io::Write;
 use std::path::PathBuf;
 
@@ -18,8 +21,16 @@ pub struct Args {
     /// Every map in the data set.
     #[arg(long)]
     all: bool,
-    /// A map name (`oa_dm1`) or a bsp path inside the pk3s.
-    map: Option<String>,
+    /// Map names (`oa_dm1`) or bsp paths inside the pk3s.
+    maps: Vec<String>,
+    /// Check only shard K of N of the maps (`K/N`: every N-th map of the list from the K-th),
+    /// for runs spread over processes or machines; `shadowlab merge` joins the parts.
+    #[arg(long, value_name = "K/N")]
+    shard: Option<String>,
+    /// Also write the JSON lines to DIR/check.jsonl, with the manifest `shadowlab merge` reads
+    /// (DIR/shard.json).
+    #[arg(long, value_name = "DIR")]
+    out: Option<PathBuf>,
     /// The techniques measured, each with the planner on and off, comma separated (any of
     /// shadow_map, psm, tsm, shadow_volume, hybrid).
     #[arg(long, default_value = "shadow_map,shadow_volume")]
@@ -32,11 +43,23 @@ const DEFAULT_SIZE: &str = "320x240";
 
 pub fn run(common: &CommonArgs, args: &Args) -> Result<()> {
     let vfs = Vfs::open_data_dir(&args.data)?;
-    let maps = match (&args.map, args.all) {
-        (Some(m), false) => vec![super::inspect::bsp_path(m)],
-        (None, true) => vfs.list("maps/", ".bsp"),
-        _ => bail!("give a MAP name, or --all"),
+    let units = match (args.maps.is_empty(), args.all) {
+        (false, false) => args
+            .maps
+            .iter()
+            .map(|m| super::inspect::bsp_path(m))
+            .collect(),
+        (true, true) => vfs.list("maps/", ".bsp"),
+        _ => bail!("give MAP names, or --all"),
     };
+    let shard = match &args.shard {
+        Some(s) => Shard::parse(s)?,
+        None => Shard::WHOLE,
+    };
+    let maps: Vec<&String> = (0..units.len())
+        .filter(|&i| shard.takes(i))
+        .map(|i| &units[i])
+        .collect();
     let mut common = common.clone();
     common.size.get_or_insert_with(|| DEFAULT_SIZE.to_string());
     let techniques = args
@@ -52,6 +75,20 @@ pub fn run(common: &CommonArgs, args: &Args) -> Result<()> {
     }
     let mut options = scene_options(&common, &toml::Table::new())?;
     options.q3.progress = false;
+    let manifest = Manifest {
+        command: "check".into(),
+        shard,
+        settings: format!("{options} techniques={}", args.techniques),
+        units: units.clone(),
+        version: env!("CARGO_PKG_VERSION").into(),
+    };
+    let mut part = match &args.out {
+        Some(dir) => {
+            manifest.write(dir)?;
+            Some(std::fs::File::create(dir.join(LINES))?)
+        }
+        None => None,
+    };
     let (_ctx, mut renderer) = start_gl(&options)?;
     let mut failed = 0;
     let out = std::io::stdout();
@@ -61,17 +98,30 @@ pub fn run(common: &CommonArgs, args: &Args) -> Result<()> {
             check_map(&mut renderer, &args.data, map, &options, &techniques)
         }))
         .unwrap_or_else(|panic| MapCheck {
-            map: map.clone(),
+            map: map.to_string(),
             error: Some(format!("panicked: {}", panic_text(&panic))),
             ..MapCheck::default()
         });
         failed += line.error.is_some() as usize;
+        let text = serde_json::to_string(&line)?;
+        if let Some(f) = &mut part {
+            writeln!(f, "{text}")?;
+            f.flush()?;
+        }
         let mut out = out.lock();
-        writeln!(out, "{}", serde_json::to_string(&line)?)?;
+        writeln!(out, "{text}")?;
         out.flush()?;
     }
+    failures(failed, maps.len())
+}
+
+/// The JSON lines' file name in `--out`'s folder.
+pub const LINES: &str = "check.jsonl";
+
+/// An error when any of `of` maps could not be checked.
+pub fn failures(failed: usize, of: usize) -> Result<()> {
     if failed > 0 {
-        bail!("{failed} of {} maps could not be checked", maps.len());
+        bail!("{failed} of {of} maps could not be checked");
     }
     Ok(())
 }

@@ -5,6 +5,7 @@ pub mod check;
 pub mod flythrough;
 pub mod info;
 pub mod inspect;
+pub mod merge;
 pub mod options;
 pub mod render;
 pub mod reproduce;

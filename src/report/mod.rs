@@ -7,5 +7,6 @@ pub mod flythrough;
 pub mod images;
 pub mod plot;
 pub mod reproduce;
+pub mod shard;
 pub mod table;
 pub mod tune;

@@ -1,0 +1,57 @@
+//! `shadowlab merge`: the parts of a sharded run (`--shard K/N --out DIR`) joined into what one
+//! run writes, after checking they are all of it exactly once and were made alike.
+
+use super::check::{LINES, failures};
+use anyhow::{Context, Result, bail};
+use shadowlab::report::shard::{self, Manifest, ShardError};
+use std::io::Write;
+use std::path::PathBuf;
+
+#[derive(clap::Args)]
+pub struct Args {
+    /// The parts' folders (each holds shard.json), in any order.
+    #[arg(required = true)]
+    parts: Vec<PathBuf>,
+    /// Also write the merged run to DIR, as one unsharded run's `--out` would.
+    #[arg(long, value_name = "DIR")]
+    out: Option<PathBuf>,
+}
+
+pub fn run(args: &Args) -> Result<()> {
+    let (whole, parts) = shard::complete_run(&args.parts)?;
+    match whole.command.as_str() {
+        "check" => merge_check(&whole, &parts, args.out.as_ref()),
+        other => bail!("cannot merge parts of `{other}`"),
+    }
+}
+
+/// `check`'s JSON lines, one per map in the run's order, on stdout (and in `out`).
+fn merge_check(whole: &Manifest, parts: &[PathBuf], out: Option<&PathBuf>) -> Result<()> {
+    // (map, line, whether the map could not be checked)
+    let mut lines: Vec<(String, String, bool)> = Vec::new();
+    for dir in parts {
+        let path = dir.join(LINES);
+        let text = std::fs::read_to_string(&path)
+            .map_err(|e| ShardError::Read(path.clone(), e.to_string()))?;
+        for line in text.lines().filter(|l| !l.trim().is_empty()) {
+            let value: serde_json::Value = serde_json::from_str(line)
+                .with_context(|| format!("{}: not a check line", path.display()))?;
+            let map = value["map"]
+                .as_str()
+                .with_context(|| format!("{}: a line without its map", path.display()))?;
+            let failed = value.get("error").is_some();
+            lines.push((map.to_string(), line.to_string(), failed));
+        }
+    }
+    let ordered = shard::in_run_order(&whole.units, lines, |(map, ..)| map.clone())?;
+    let failed = ordered.iter().filter(|(.., failed)| *failed).count();
+    let text: String = ordered.iter().map(|(_, l, _)| format!("{l}\n")).collect();
+    if let Some(dir) = out {
+        whole.write(dir)?;
+        std::fs::write(dir.join(LINES), &text)?;
+    }
+    let mut stdout = std::io::stdout().lock();
+    stdout.write_all(text.as_bytes())?;
+    stdout.flush()?;
+    failures(failed, ordered.len())
+}
