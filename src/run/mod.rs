@@ -164,11 +164,16 @@ impl Renderer {
     }
 
     /// `options` as a frame on this GL runs them: the fixed-function choices its GL lacks
-    /// replaced (with what was replaced), the profile resolved.
-    fn resolve(&self, options: &Options) -> Result<(Options, Vec<Fallback>), RenderError> {
+    /// replaced (with what was replaced), the profile resolved; and the GL's capabilities less
+    /// those `options` disable, which they were resolved against.
+    fn resolve(&self, options: &Options) -> Result<(Options, Vec<Fallback>, Caps), RenderError> {
         let caps = self.caps_for(options)?;
         let (options, fallbacks) = fixed_function::resolve_all(options, |f| caps.has(f));
-        Ok((profile::resolve(options, caps.is_software()), fallbacks))
+        Ok((
+            profile::resolve(options, caps.is_software()),
+            fallbacks,
+            caps,
+        ))
     }
 
     /// Plans and renders one frame of `scene` (which must be the loaded one).
@@ -196,9 +201,8 @@ impl Renderer {
         request: FrameRequest,
     ) -> Result<Frame, RenderError> {
         let (before, start) = (syncs::counted(), Instant::now());
-        let (options, fallbacks) = self.resolve(options)?;
+        let (options, fallbacks, caps) = self.resolve(options)?;
         let options = &options;
-        let caps = self.caps_for(options)?;
         let settings = PassSettings::of(options);
         if settings.fixed_function && !self.drawer.has_legacy() {
             return Err(RenderError::Unsupported(
