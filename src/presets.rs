@@ -31,6 +31,7 @@ const PAPER: &[(&str, &str)] = &[
     ("technique", "shadow_volume"),
     ("shadow_map.depth_source", "copy"),
     ("shadow_map.size", "512"),
+    ("shadow_map.budget_mb", "0"),
     ("shadow_map.depth_bits", "24"),
     ("shadow_map.compare", "hardware"),
     ("shadow_map.result", "alpha"),
@@ -160,15 +161,15 @@ mod tests {
     }
 
     #[test]
-    fn the_paper_differs_from_the_defaults_in_the_planner_the_technique_the_casters_the_offset_growth_the_light_marks_and_gpu_extrusion()
-     {
+    fn the_paper_differs_from_the_defaults_only_where_the_options_say_why() {
         // Guards the claim in the options' docs that the other defaults are the paper's (the
         // casters: the paper's one-sided faces lose shadows on open worlds; the offset growth
         // erases later lights' contact shadows on maps with many lights; the light marks keep
         // overlapping triangles from taking a light twice; docs/checks.md; the texgen space:
         // eye-linear planes round past the offset at Quake 3 scale, docs/shadow-maps.md; GPU
         // extrusion: `auto` extrudes what moves on the GPU under the gpu profile, the paper
-        // builds every volume on the CPU).
+        // builds every volume on the CPU; the map budget: the paper draws every map first,
+        // whatever memory they take).
         let keys: Vec<String> = Preset::Paper
             .differences(&Options::default())
             .into_iter()
@@ -179,6 +180,7 @@ mod tests {
             [
                 "lighting.light_once",
                 "plan.enabled",
+                "shadow_map.budget_mb",
                 "shadow_map.cull",
                 "shadow_map.offset_growth",
                 "shadow_map.texgen",

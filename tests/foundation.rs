@@ -152,7 +152,7 @@ fn info_json_reports_the_egl_path_and_each_missing_feature_as_a_fallback() {
     assert_eq!(missing, fallbacks.len());
     // No options given: the defaults, which differ from the paper's frame in the planner, the
     // technique, the casters (both faces), the offset growth, the light marks, the texgen
-    // space and the GPU extrusion (`auto`) only.
+    // space, the GPU extrusion (`auto`) and the map budget only.
     assert_eq!(v["preset"], "default");
     let differs: Vec<&str> = v["differs_from_paper"]
         .as_array()
@@ -165,6 +165,7 @@ fn info_json_reports_the_egl_path_and_each_missing_feature_as_a_fallback() {
         [
             "lighting.light_once",
             "plan.enabled",
+            "shadow_map.budget_mb",
             "shadow_map.cull",
             "shadow_map.offset_growth",
             "shadow_map.texgen",

@@ -36,6 +36,11 @@ pub struct Args {
     /// recorded path, else 1).
     #[arg(long)]
     sample_every: Option<usize>,
+    /// MiB the round-robin renderers' shadow maps may hold together: past it the
+    /// configurations are timed a group at a time, each with its baseline (default: all at
+    /// once). Each renderer's own maps stay within `shadow_map.budget_mb`.
+    #[arg(long, value_name = "MIB")]
+    memory_mb: Option<f32>,
     /// Time one configuration after another on one renderer, instead of round-robin (one frame
     /// of each configuration and baseline in turn, each on its own renderer), which keeps the
     /// ratios steady when the machine's speed drifts.
@@ -124,6 +129,7 @@ pub fn run(common: &CommonArgs, args: &Args) -> Result<()> {
         breakdown: true,
         motion: !args.no_motion,
         sample_every: args.sample_every.unwrap_or(if recorded { 4 } else { 1 }),
+        memory_mb: args.memory_mb,
     };
     let rows = Bench::new(&mut renderer, &scene, settings).run(&configs)?;
     println!("{}", table::markdown(&rows));

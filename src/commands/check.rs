@@ -9,6 +9,7 @@ use anyhow::{Result, bail};
 use shadowlab::options::{OptionValue, Technique};
 use shadowlab::q3::pk3::Vfs;
 use shadowlab::report::check::{MapCheck, check_map};
+use shadowlab::report::progress::Lines;
 use shadowlab::report::shard::{Manifest, Shard};
 use std::io::Write;
 use std::path::PathBuf;
@@ -92,8 +93,9 @@ pub fn run(common: &CommonArgs, args: &Args) -> Result<()> {
     let (_ctx, mut renderer) = start_gl(&options)?;
     let mut failed = 0;
     let out = std::io::stdout();
-    for (i, map) in maps.iter().enumerate() {
-        eprintln!("[{}/{}] {map}", i + 1, maps.len());
+    let mut progress = Lines::new(maps.len(), "maps");
+    for map in &maps {
+        eprintln!("{}", progress.next(map));
         let line = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
             check_map(&mut renderer, &args.data, map, &options, &techniques)
         }))
@@ -112,6 +114,7 @@ pub fn run(common: &CommonArgs, args: &Args) -> Result<()> {
         writeln!(out, "{text}")?;
         out.flush()?;
     }
+    eprintln!("{}", progress.finish());
     failures(failed, maps.len())
 }
 

@@ -4,9 +4,10 @@
 
 use super::{CommonArgs, camera_path, load, start_gl};
 use anyhow::{Context, Result};
-use indicatif::{ProgressBar, ProgressStyle};
+use indicatif::ProgressBar;
 use shadowlab::report::bench::BenchRow;
 use shadowlab::report::plot;
+use shadowlab::report::progress;
 use shadowlab::report::table::{Align, Table, bench_table};
 use shadowlab::report::tune::{TuneResult, TuneSettings, space, tune};
 use std::path::PathBuf;
@@ -38,6 +39,11 @@ pub struct Args {
     /// within the target).
     #[arg(long)]
     no_per_light: bool,
+    /// MiB the final round's renderers' shadow maps may hold together: past it the finalists
+    /// are timed a group at a time, each with its baseline (0: all at once, whatever they
+    /// hold). Each renderer's own maps stay within `shadow_map.budget_mb`.
+    #[arg(long, value_name = "MIB", default_value_t = shadowlab::report::tune::DEFAULT_MEMORY_MB)]
+    memory_mb: f32,
     /// Folder for tune.md, tune.json and tune.png (default: tune-<scene>).
     #[arg(long)]
     out: Option<PathBuf>,
@@ -143,6 +149,7 @@ pub fn run(common: &CommonArgs, args: &Args) -> Result<()> {
     settings.seed = args.seed;
     settings.per_light = !args.no_per_light;
     settings.accuracy = args.accuracy;
+    settings.memory_mb = (args.memory_mb > 0.0).then_some(args.memory_mb);
     let (_ctx, mut renderer) = start_gl(&options)?;
     renderer.load_scene(&scene)?;
     eprintln!(
@@ -158,11 +165,10 @@ pub fn run(common: &CommonArgs, args: &Args) -> Result<()> {
             "still camera".into()
         }
     );
-    let bar = ProgressBar::new(0);
-    bar.set_style(
-        ProgressStyle::with_template("{prefix}: {bar:30} {pos}/{len}  {msg}")
-            .unwrap_or_else(|_| ProgressStyle::default_bar()),
-    );
+    let bar = ProgressBar::with_draw_target(Some(0), progress::draw_target());
+    bar.set_style(progress::style(
+        "{prefix}: [{elapsed_precise}] {bar:30} {pos}/{len}, {eta} left, {peak}  {msg}",
+    ));
     let result = tune(&mut renderer, &scene, &options, &settings, &bar)?;
     bar.finish_and_clear();
     let out = args

@@ -4,6 +4,7 @@
 //! remembers what it was drawn from, so that the planner's cache can reuse it.
 
 use crate::options::{Compare, DepthBits, Filter, MapBuffer};
+use crate::plan::map_memory;
 use glow::HasContext;
 
 /// What a map's texture is: a map of another kind holds nothing reusable.
@@ -17,18 +18,43 @@ pub struct MapKey {
     pub levels: u32,
 }
 
+impl MapKey {
+    /// Bytes the texture holds (as `shadow_map.budget_mb` counts them).
+    fn bytes(&self) -> u64 {
+        map_memory::depth_texture_bytes(self.cube, self.size, self.bits, self.levels)
+    }
+}
+
 struct Slot {
     texture: glow::Texture,
     key: MapKey,
     /// The plan's key of what the texture holds (None: nothing reusable).
     content: Option<u64>,
+    /// The stamp it was last used at: one of the current stamp is in use and never given up.
+    used: u64,
 }
 
 type Slots = std::collections::HashMap<(usize, usize), Slot>;
 
-/// The depth textures and the framebuffer used to render into them (the FBO path).
+/// A view's map or its static map.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Role {
+    Map,
+    Static,
+}
+
+/// The depth textures and the framebuffer used to render into them (the FBO path), within
+/// the plan's budget (`shadow_map.budget_mb`): past it, a new view takes over a texture of
+/// its kind that no view of the current stamp uses, or the least recently used are deleted.
 #[derive(Default)]
 pub struct ShadowMaps {
+    /// Bytes the textures may hold together (None: no limit).
+    budget: Option<u64>,
+    /// Advanced once per frame when every light's maps are drawn first, once per light when
+    /// each light's are drawn before its pass: textures used at the current stamp are in use.
+    stamp: u64,
+    /// Textures taken over or deleted to stay within the budget, since the renderer began.
+    given_up: usize,
     slots: Slots,
     /// Static maps: per view whose map is made from one, the depth of its casters that do not
     /// move (`LightPlan::view_static_keys`), of its map's kind.
@@ -105,34 +131,6 @@ fn allocate(gl: &glow::Context, key: MapKey) -> Result<glow::Texture, String> {
     }
 }
 
-/// The texture of `at` in `slots`, (re)allocated to match `key`, and the key of what it holds.
-fn slot_in(
-    slots: &mut Slots,
-    gl: &glow::Context,
-    at: (usize, usize),
-    key: MapKey,
-) -> Result<(glow::Texture, Option<u64>), String> {
-    match slots.get(&at) {
-        Some(slot) if slot.key == key => return Ok((slot.texture, slot.content)),
-        Some(old) => {
-            // SAFETY: the old texture is ours and no longer referenced.
-            unsafe { gl.delete_texture(old.texture) };
-        }
-        None => {}
-    }
-    let texture = allocate(gl, key)?;
-    let content = None;
-    slots.insert(
-        at,
-        Slot {
-            texture,
-            key,
-            content,
-        },
-    );
-    Ok((texture, content))
-}
-
 /// Deletes the textures of `slots` whose kind none of `kinds` has (cube or not aside).
 fn release_in(slots: &mut Slots, gl: &glow::Context, kinds: &[MapKey]) {
     slots.retain(|_, s| {
@@ -151,6 +149,49 @@ fn release_in(slots: &mut Slots, gl: &glow::Context, kinds: &[MapKey]) {
 }
 
 impl ShadowMaps {
+    /// The budget the textures keep within from now on (None: no limit).
+    pub fn set_budget(&mut self, budget: Option<u64>) {
+        self.budget = budget;
+    }
+
+    /// The budget the textures keep within (None: no limit).
+    pub fn budget(&self) -> Option<u64> {
+        self.budget
+    }
+
+    /// Starts a new stamp: the textures used so far may be given up for those used next.
+    pub fn next_stamp(&mut self) {
+        self.stamp += 1;
+    }
+
+    /// Textures taken over or deleted to keep within the budget so far.
+    pub fn given_up(&self) -> usize {
+        self.given_up
+    }
+
+    /// Bytes the textures hold together.
+    pub fn bytes(&self) -> u64 {
+        let maps: u64 = self
+            .slots
+            .values()
+            .chain(self.statics.values())
+            .map(|s| s.key.bytes())
+            .sum();
+        let ids: u64 = self
+            .ids
+            .values()
+            .map(|&(_, size)| map_memory::id_texture_bytes(size))
+            .sum();
+        maps + ids
+    }
+
+    fn slots_of(&mut self, role: Role) -> &mut Slots {
+        match role {
+            Role::Map => &mut self.slots,
+            Role::Static => &mut self.statics,
+        }
+    }
+
     /// The texture of view `at` (light, view), (re)allocated to match, and the key of what it
     /// holds.
     pub fn slot(
@@ -159,7 +200,7 @@ impl ShadowMaps {
         at: (usize, usize),
         key: MapKey,
     ) -> Result<(glow::Texture, Option<u64>), String> {
-        slot_in(&mut self.slots, gl, at, key)
+        self.slot_of(gl, Role::Map, at, key)
     }
 
     /// The static map of view `at` (light, view; of the kind of its map), (re)allocated to
@@ -170,7 +211,107 @@ impl ShadowMaps {
         at: (usize, usize),
         key: MapKey,
     ) -> Result<(glow::Texture, Option<u64>), String> {
-        slot_in(&mut self.statics, gl, at, key)
+        self.slot_of(gl, Role::Static, at, key)
+    }
+
+    /// The texture of `at` among `role`'s, (re)allocated to match `key` within the budget,
+    /// and the key of what it holds.
+    fn slot_of(
+        &mut self,
+        gl: &glow::Context,
+        role: Role,
+        at: (usize, usize),
+        key: MapKey,
+    ) -> Result<(glow::Texture, Option<u64>), String> {
+        let stamp = self.stamp;
+        let slots = self.slots_of(role);
+        if let Some(slot) = slots.get_mut(&at) {
+            if slot.key == key {
+                slot.used = stamp;
+                return Ok((slot.texture, slot.content));
+            }
+            let old = slots.remove(&at).expect("present");
+            // SAFETY: the old texture is ours and no longer referenced.
+            unsafe { gl.delete_texture(old.texture) };
+        }
+        let texture = match self.take_over(gl, role, key) {
+            Some(t) => t,
+            None => {
+                self.evict_for(gl, key.bytes());
+                allocate(gl, key)?
+            }
+        };
+        let content = None;
+        let slot = Slot {
+            texture,
+            key,
+            content,
+            used: stamp,
+        };
+        self.slots_of(role).insert(at, slot);
+        Ok((texture, content))
+    }
+
+    /// Over the budget with one more texture of `key`: the least recently used texture of
+    /// `role` and that kind no view of the current stamp uses, taken from its view.
+    fn take_over(&mut self, gl: &glow::Context, role: Role, key: MapKey) -> Option<glow::Texture> {
+        let budget = self.budget?;
+        if self.bytes() + key.bytes() <= budget {
+            return None;
+        }
+        let stamp = self.stamp;
+        let at = self
+            .slots_of(role)
+            .iter()
+            .filter(|(_, s)| s.key == key && s.used < stamp)
+            .min_by_key(|(_, s)| s.used)
+            .map(|(at, _)| *at)?;
+        let slot = self.slots_of(role).remove(&at).expect("present");
+        if role == Role::Map {
+            self.delete_ids(gl, at);
+        }
+        self.given_up += 1;
+        Some(slot.texture)
+    }
+
+    /// Deletes the least recently used textures no view of the current stamp uses until
+    /// `need` more bytes fit the budget, or none is left to delete.
+    fn evict_for(&mut self, gl: &glow::Context, need: u64) {
+        let Some(budget) = self.budget else {
+            return;
+        };
+        let stamp = self.stamp;
+        while self.bytes() + need > budget {
+            let oldest = [Role::Map, Role::Static]
+                .into_iter()
+                .flat_map(|role| {
+                    let slots = match role {
+                        Role::Map => &self.slots,
+                        Role::Static => &self.statics,
+                    };
+                    slots.iter().map(move |(at, s)| (role, *at, s.used))
+                })
+                .filter(|&(_, _, used)| used < stamp)
+                .min_by_key(|&(_, _, used)| used);
+            let Some((role, at, _)) = oldest else {
+                return;
+            };
+            let slot = self.slots_of(role).remove(&at).expect("present");
+            // SAFETY: our texture; no view of the current stamp reads it.
+            unsafe { gl.delete_texture(slot.texture) };
+            if role == Role::Map {
+                self.delete_ids(gl, at);
+            }
+            self.given_up += 1;
+        }
+    }
+
+    /// Deletes the ID texture of view `at`, whose map was given up.
+    fn delete_ids(&mut self, gl: &glow::Context, at: (usize, usize)) {
+        if let Some((t, _)) = self.ids.remove(&at) {
+            // SAFETY: our texture; its map is gone.
+            unsafe { gl.delete_texture(t) };
+        }
     }
 
     /// Records what the static map of view `at` now holds.
@@ -272,7 +413,9 @@ impl ShadowMaps {
             }
             // SAFETY: our texture, replaced.
             unsafe { gl.delete_texture(t) };
+            self.ids.remove(&(light, view));
         }
+        self.evict_for(gl, map_memory::id_texture_bytes(size));
         // SAFETY: storage for a new texture; the binding is reset afterwards.
         let t = unsafe {
             let t = gl.create_texture()?;

@@ -4,6 +4,7 @@
 use crate::images::Rgba;
 use crate::scene::{BakedLight, Scene, SurfaceOwner, Vertex};
 use glow::HasContext;
+use std::rc::Rc;
 
 /// A run of indices drawn with one state.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -51,10 +52,9 @@ pub struct GpuScene {
     pub vao: glow::VertexArray,
     vbo: glow::Buffer,
     ibo: glow::Buffer,
-    pub textures: Vec<glow::Texture>,
-    pub lightmaps: Vec<glow::Texture>,
-    /// Bound where a material has no texture.
-    pub white: glow::Texture,
+    /// The scene's images: shared by renderers on one context drawing one scene
+    /// ([`GpuScene::sharing_images`]), deleted with the last of them.
+    images: Rc<SceneImages>,
     /// Surfaces in draw-state order.
     order: Vec<usize>,
     /// First index of each surface (by scene surface index) in the GPU index buffer.
@@ -150,22 +150,16 @@ fn upload_image(
     }
 }
 
-impl GpuScene {
-    pub fn new(
-        gl: &glow::Context,
-        scene: &Scene,
-        max_texture_size: u32,
-    ) -> Result<GpuScene, String> {
-        let mut order: Vec<usize> = (0..scene.surfaces.len()).collect();
-        order.sort_by_key(|&s| state_key(scene, s));
-        let mut indices = Vec::with_capacity(scene.indices.len());
-        let mut gpu_first = vec![0u32; scene.surfaces.len()];
-        for &s in &order {
-            let surf = &scene.surfaces[s];
-            gpu_first[s] = indices.len() as u32;
-            let range = surf.first_index as usize..(surf.first_index + surf.index_count) as usize;
-            indices.extend_from_slice(&scene.indices[range]);
-        }
+/// A scene's textures and lightmaps on the GPU.
+pub struct SceneImages {
+    pub textures: Vec<glow::Texture>,
+    pub lightmaps: Vec<glow::Texture>,
+    /// Bound where a material has no texture.
+    pub white: glow::Texture,
+}
+
+impl SceneImages {
+    fn upload(gl: &glow::Context, scene: &Scene, max_texture_size: u32) -> Result<Self, String> {
         let fit = |img: &Rgba| -> Rgba {
             if img.width.max(img.height) > max_texture_size || img.width == 0 || img.height == 0 {
                 log::warn!(
@@ -178,6 +172,76 @@ impl GpuScene {
                 img.clone()
             }
         };
+        let textures = scene
+            .textures
+            .iter()
+            .map(|t| upload_image(gl, &fit(t), true, true))
+            .collect::<Result<_, _>>()?;
+        let lightmaps = scene
+            .lightmaps
+            .iter()
+            .map(|t| upload_image(gl, &fit(t), false, false))
+            .collect::<Result<_, _>>()?;
+        let white = upload_image(gl, &Rgba::solid([255, 255, 255, 255]), false, true)?;
+        Ok(SceneImages {
+            textures,
+            lightmaps,
+            white,
+        })
+    }
+
+    fn delete(&self, gl: &glow::Context) {
+        // SAFETY: called once, by the last renderer holding them.
+        unsafe {
+            for t in self.textures.iter().chain(&self.lightmaps) {
+                gl.delete_texture(*t);
+            }
+            gl.delete_texture(self.white);
+        }
+    }
+}
+
+impl GpuScene {
+    pub fn new(
+        gl: &glow::Context,
+        scene: &Scene,
+        max_texture_size: u32,
+    ) -> Result<GpuScene, String> {
+        let images = SceneImages::upload(gl, scene, max_texture_size)?;
+        Self::with_images(gl, scene, Rc::new(images))
+    }
+
+    /// `scene` uploaded with `other`'s images, which must be `scene`'s (a renderer beside
+    /// `other`'s, on its context): its vertices and indices are its own (its models' poses
+    /// are its own), its textures and lightmaps, most of a map's memory, are not copied.
+    pub fn sharing_images(
+        gl: &glow::Context,
+        scene: &Scene,
+        other: &GpuScene,
+    ) -> Result<GpuScene, String> {
+        Self::with_images(gl, scene, other.images.clone())
+    }
+
+    /// The images this scene's textures and lightmaps are, for its draws.
+    pub fn images(&self) -> &SceneImages {
+        &self.images
+    }
+
+    fn with_images(
+        gl: &glow::Context,
+        scene: &Scene,
+        images: Rc<SceneImages>,
+    ) -> Result<GpuScene, String> {
+        let mut order: Vec<usize> = (0..scene.surfaces.len()).collect();
+        order.sort_by_key(|&s| state_key(scene, s));
+        let mut indices = Vec::with_capacity(scene.indices.len());
+        let mut gpu_first = vec![0u32; scene.surfaces.len()];
+        for &s in &order {
+            let surf = &scene.surfaces[s];
+            gpu_first[s] = indices.len() as u32;
+            let range = surf.first_index as usize..(surf.first_index + surf.index_count) as usize;
+            indices.extend_from_slice(&scene.indices[range]);
+        }
         // SAFETY: buffers are created and filled from slices of plain-old-data vertices.
         unsafe {
             let vao = gl.create_vertex_array()?;
@@ -197,24 +261,11 @@ impl GpuScene {
             gl.bind_buffer(glow::ELEMENT_ARRAY_BUFFER, Some(ibo));
             buffer_data(gl, glow::ELEMENT_ARRAY_BUFFER, &indices, glow::STATIC_DRAW);
             gl.bind_vertex_array(None);
-            let textures = scene
-                .textures
-                .iter()
-                .map(|t| upload_image(gl, &fit(t), true, true))
-                .collect::<Result<_, _>>()?;
-            let lightmaps = scene
-                .lightmaps
-                .iter()
-                .map(|t| upload_image(gl, &fit(t), false, false))
-                .collect::<Result<_, _>>()?;
-            let white = upload_image(gl, &Rgba::solid([255, 255, 255, 255]), false, true)?;
             Ok(GpuScene {
                 vao,
                 vbo,
                 ibo,
-                textures,
-                lightmaps,
-                white,
+                images,
                 order,
                 gpu_first,
                 index_count: indices.len(),
@@ -316,20 +367,20 @@ impl GpuScene {
     pub fn texture_for(&self, scene: &Scene, material: usize) -> glow::Texture {
         scene.materials[material]
             .texture
-            .and_then(|t| self.textures.get(t).copied())
-            .unwrap_or(self.white)
+            .and_then(|t| self.images.textures.get(t).copied())
+            .unwrap_or(self.images.white)
     }
 
-    pub fn delete(&self, gl: &glow::Context) {
+    /// Deletes the buffers, and the images unless another renderer still shares them.
+    pub fn delete(self, gl: &glow::Context) {
         // SAFETY: called once by the owner.
         unsafe {
             gl.delete_vertex_array(self.vao);
             gl.delete_buffer(self.vbo);
             gl.delete_buffer(self.ibo);
-            for t in self.textures.iter().chain(&self.lightmaps) {
-                gl.delete_texture(*t);
-            }
-            gl.delete_texture(self.white);
+        }
+        if let Ok(images) = Rc::try_unwrap(self.images) {
+            images.delete(gl);
         }
     }
 }

@@ -381,6 +381,14 @@ define_options! {
         size: u32 = 512, in 16 ..= 8192;
         /// Depth texture precision: 24-bit (paper), 16-bit or 32-bit float.
         depth_bits: DepthBits = DepthBits::D24;
+        /// Memory for shadow maps, in MiB (depth, static and ID textures together). A frame
+        /// whose maps fit draws every light's maps first, as the paper does, and keeps them
+        /// for later frames while they fit; one whose maps would hold more draws each light's
+        /// maps just before its own pass, into textures the lights share, the least recently
+        /// drawn given up first, so memory stays within this whatever the lights and sizes
+        /// (on oa_dm3, 51 omni lights of 2048-texel cubes would hold 5 GB). 0: no limit,
+        /// every map first (the paper).
+        budget_mb: f32 = 1024.0, in 0.0 ..= 1048576.0;
         /// Hardware compare (sampler2DShadow, LEQUAL) or a compare in the shader.
         compare: Compare = Compare::Hardware;
         /// Compare result in alpha, then the alpha test (paper), or intensity (thesis 2.2.6).

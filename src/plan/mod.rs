@@ -10,6 +10,7 @@ pub mod depth_bounds;
 pub mod fallback;
 pub mod fixed_function;
 pub mod kept_frusta;
+pub mod map_memory;
 pub mod merge;
 pub mod occlusion;
 pub mod pass;
@@ -247,6 +248,12 @@ pub struct PlanStats {
     pub warps: Vec<String>,
     /// Views of warped lights that fell back to a standard map.
     pub warp_fallbacks: usize,
+    /// Bytes the frame's shadow maps hold together (depth, static and ID textures), as
+    /// `shadow_map.budget_mb` counts them.
+    pub map_bytes: u64,
+    /// They hold more than `shadow_map.budget_mb`: each light's maps are drawn just before its
+    /// own pass ([`Plan::maps_per_light`]).
+    pub maps_per_light: bool,
     /// Per omni light under `shadow_map.omni = frusta`: "light i: n frusta, t texels (the six
     /// faces' budget b): face/size ...".
     pub frusta: Vec<String>,
@@ -266,6 +273,10 @@ pub struct Plan {
     pub stencil: StencilPasses,
     /// Enabled lights the planner culled (their masks are empty).
     pub culled: Vec<usize>,
+    /// Each light's maps drawn just before its own pass, into textures the lights share:
+    /// the frame's maps together would hold more than `shadow_map.budget_mb`
+    /// ([`map_memory`]). Otherwise every light's maps are drawn first (the paper).
+    pub maps_per_light: bool,
     pub stats: PlanStats,
 }
 

@@ -6,6 +6,7 @@ pub mod estimate;
 pub mod flythrough;
 pub mod images;
 pub mod plot;
+pub mod progress;
 pub mod reproduce;
 pub mod shard;
 pub mod table;

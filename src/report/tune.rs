@@ -235,7 +235,16 @@ pub struct TuneSettings {
     /// Camera poses, cycled through.
     #[serde(skip)]
     pub path: Vec<PathKey>,
+    /// MiB the final round's renderers' shadow maps may hold together: past it the finalists
+    /// are timed a group at a time (`BenchSettings::memory_mb`). Each renderer's own maps
+    /// stay within `shadow_map.budget_mb`.
+    pub memory_mb: Option<f32>,
 }
+
+/// `TuneSettings::memory_mb` unless told otherwise: with a renderer's maps within
+/// `shadow_map.budget_mb` (1024 by default) and the scene's images shared, a search of
+/// oa_dm3 then peaks within 2 GiB (docs/reproduce.md, "Memory").
+pub const DEFAULT_MEMORY_MB: f32 = 1024.0;
 
 impl TuneSettings {
     /// A search of `candidates` configurations along `path`.
@@ -249,6 +258,7 @@ impl TuneSettings {
             per_light: true,
             accuracy: 0.5,
             path,
+            memory_mb: Some(DEFAULT_MEMORY_MB),
         }
     }
 }
@@ -422,6 +432,7 @@ fn measure_stage(
         // The scene as loaded: tune compares techniques, the path moves the camera.
         motion: false,
         sample_every: 1,
+        memory_mb: settings.memory_mb,
     };
     let rows = Bench::new(renderer, scene, bench).run_with(configs, bar)?;
     let rung = Rung {

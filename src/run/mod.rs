@@ -34,8 +34,10 @@ pub use crate::gl::{FrameRequest, FrameTexture, Overlays, RenderError};
 /// Counts of what a renderer keeps across frames ([`Renderer::held`]).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub struct Held {
-    /// Shadow-map and ID-buffer textures.
+    /// Shadow-map and ID-buffer textures, and the bytes they hold together (what
+    /// `shadow_map.budget_mb` bounds).
     pub map_textures: usize,
+    pub map_bytes: u64,
     /// Volume parts built and kept for the frames that draw them again.
     pub volume_parts: usize,
     /// Depth-pass parts' clip planes fitted to the last depth buffer.
@@ -83,6 +85,20 @@ impl Renderer {
         Ok(Renderer::with(self.drawer.sibling(width, height)?))
     }
 
+    /// [`Renderer::sibling`] with `scene` (the one this renderer has loaded) loaded, sharing
+    /// this one's textures and lightmaps: renderers compared side by side on one scene hold
+    /// its images once.
+    pub fn sibling_with_scene(
+        &self,
+        width: u32,
+        height: u32,
+        scene: &Scene,
+    ) -> Result<Renderer, RenderError> {
+        let mut drawer = self.drawer.sibling(width, height)?;
+        drawer.load_scene_beside(scene, &self.drawer)?;
+        Ok(Renderer::with(drawer))
+    }
+
     fn with(drawer: Drawer) -> Renderer {
         Renderer {
             drawer,
@@ -120,6 +136,7 @@ impl Renderer {
         let (volume_parts, depth_fits) = self.planner.held_volumes();
         Held {
             map_textures: self.drawer.shadow_map_textures(),
+            map_bytes: self.drawer.shadow_map_bytes(),
             volume_parts,
             depth_fits,
         }
@@ -129,6 +146,16 @@ impl Renderer {
     /// them afresh for its own view.
     pub fn forget_kept_frusta(&mut self) {
         self.planner.forget_kept_frusta();
+    }
+
+    /// Drops what frames kept for later frames, on the GPU and in the planner (maps, volumes,
+    /// caster groups, `auto`'s measurements): memory falls back to the scene's own, and the
+    /// next frame starts as the first after [`Renderer::load_scene`] does. A run measuring
+    /// one configuration after another calls it between them, so that none holds what the
+    /// ones before it kept.
+    pub fn release_kept(&mut self) {
+        self.drawer.release_kept();
+        self.planner.forget();
     }
 
     /// Uploads a scene, replacing the previous one; what the planner kept belongs to the old.

@@ -70,7 +70,7 @@ pub fn draw(ctx: &PassContext, ff: &FixedFunction) {
             };
             let lightmap = item
                 .lightmap
-                .and_then(|lm| ctx.gpu.lightmaps.get(lm).copied());
+                .and_then(|lm| ctx.gpu.images().lightmaps.get(lm).copied());
             let baked = match (item.baked, lightmap) {
                 _ if !lighting.baked => None,
                 (BakedLight::Lightmap, Some(lm)) => Some(Some(lm)),

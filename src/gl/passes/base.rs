@@ -41,7 +41,7 @@ pub fn draw(ctx: &PassContext, program: &Program) {
         program.set_vec3(gl, "u_ambient", Vec3::splat(level));
         let lightmap = item
             .lightmap
-            .and_then(|l| ctx.gpu.lightmaps.get(l).copied());
+            .and_then(|l| ctx.gpu.images().lightmaps.get(l).copied());
         let baked = match (item.baked, lightmap) {
             _ if !lighting.baked => 0,
             (BakedLight::Lightmap, Some(_)) => 1,

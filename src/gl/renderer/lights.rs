@@ -9,6 +9,17 @@ impl<'a> FrameRun<'a> {
         let plan = self.ctx.plan;
         let mut stencil_image = None;
         for (pi, lp) in plan.lights.iter().enumerate() {
+            // Over the map budget, each light's maps are drawn just before its passes, into
+            // textures the lights before it may have used.
+            let own;
+            let maps = if plan.maps_per_light && lp.technique.uses_maps() {
+                self.shadow_maps.next_stamp();
+                own = go_on!(self.light_maps(pi));
+                self.target.bind(self.ctx.gl);
+                &own[..]
+            } else {
+                maps
+            };
             set_scissor(self.ctx.gl, lp.scissor);
             if lp.technique == Technique::Hybrid {
                 if let Some(image) = go_on!(self.hybrid_light(pi, maps)) {
@@ -44,6 +55,9 @@ impl<'a> FrameRun<'a> {
                 }
                 go_on!(self.step(StepKind::Lit, Some(lp), None, Self::color_image));
             }
+        }
+        if plan.maps_per_light {
+            self.finish_maps();
         }
         Ok(ControlFlow::Continue(stencil_image))
     }

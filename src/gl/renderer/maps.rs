@@ -6,46 +6,65 @@ use crate::plan::ImageCasters;
 
 impl<'a> FrameRun<'a> {
     /// Every shadow-mapped light's views into their depth textures (drawn again only when
-    /// the plan's key for the view changed).
+    /// the plan's key for the view changed), when they fit the budget together; none when
+    /// each light's come just before its own pass (`Plan::maps_per_light`, `light_maps`).
     pub(crate) fn shadow_map_passes(&mut self) -> Flow<Vec<ViewMap>> {
-        let (gl, plan) = (self.ctx.gl, self.ctx.plan);
-        let sm = &self.ctx.settings.shadow_map;
+        let plan = self.ctx.plan;
         let mut maps: Vec<ViewMap> = Vec::new();
-        let mut kinds: Vec<MapKey> = Vec::new();
-        let any_ids = plan
-            .lights
-            .iter()
-            .any(|lp| lp.technique.uses_maps() && lp.buffer == MapBuffer::Id);
-        let fbo = if plan.any_maps() && (!self.copy || any_ids) {
+        if plan.maps_per_light {
+            return Ok(ControlFlow::Continue(maps));
+        }
+        self.shadow_maps.next_stamp();
+        for (pi, lp) in plan.lights.iter().enumerate() {
+            if lp.technique.uses_maps() {
+                maps.extend(go_on!(self.light_maps(pi)));
+            }
+        }
+        self.finish_maps();
+        Ok(ControlFlow::Continue(maps))
+    }
+
+    /// Light `pi`'s views into their depth textures (drawn again only when the plan's key for
+    /// the view changed), for its lit passes.
+    pub(crate) fn light_maps(&mut self, pi: usize) -> Flow<Vec<ViewMap>> {
+        let (gl, plan) = (self.ctx.gl, self.ctx.plan);
+        let lp = &plan.lights[pi];
+        let sm = &self.ctx.settings.shadow_map;
+        let buffer = lp.buffer;
+        let fbo = if !self.copy || buffer == MapBuffer::Id {
             Some(self.shadow_maps.fbo(gl).map_err(RenderError::Gl)?)
         } else {
             None
         };
-        for (pi, lp) in plan.lights.iter().enumerate() {
-            if !lp.technique.uses_maps() {
-                continue;
+        let (table, table_changed) = self
+            .id_tables
+            .table(
+                gl,
+                self.ctx.scene,
+                self.ctx.gpu,
+                buffer,
+                sm.id_unit,
+                lp.light,
+            )
+            .map_err(RenderError::Gl)?;
+        // A light's scissor is its lit pass's, not its maps': the one before may have set it.
+        set_scissor(gl, None);
+        let mut maps = Vec::with_capacity(lp.views.len());
+        for vi in 0..lp.views.len() {
+            let (map, kind) = go_on!(self.map_view((pi, lp, vi), (table, table_changed), fbo));
+            if !self.map_kinds.contains(&kind) {
+                self.map_kinds.push(kind);
             }
-            let buffer = lp.buffer;
-            let (table, table_changed) = self
-                .id_tables
-                .table(
-                    gl,
-                    self.ctx.scene,
-                    self.ctx.gpu,
-                    buffer,
-                    sm.id_unit,
-                    lp.light,
-                )
-                .map_err(RenderError::Gl)?;
-            for vi in 0..lp.views.len() {
-                let (map, kind) = go_on!(self.map_view((pi, lp, vi), (table, table_changed), fbo));
-                if !kinds.contains(&kind) {
-                    kinds.push(kind);
-                }
-                maps.push(map);
-            }
+            maps.push(map);
         }
-        self.shadow_maps.release_unlike(gl, &kinds);
+        Ok(ControlFlow::Continue(maps))
+    }
+
+    /// After the frame's last map: the textures of kinds it no longer draws, and the static
+    /// maps of views drawn whole now, deleted.
+    pub(crate) fn finish_maps(&mut self) {
+        let (gl, plan) = (self.ctx.gl, self.ctx.plan);
+        self.shadow_maps.release_unlike(gl, &self.map_kinds);
         let lights: Vec<usize> = plan
             .lights
             .iter()
@@ -62,7 +81,6 @@ impl<'a> FrameRun<'a> {
             })
             .collect();
         self.shadow_maps.release_statics(gl, &lights, &split);
-        Ok(ControlFlow::Continue(maps))
     }
 
     /// One view of a light into its map (its six faces for a cube), drawn again only when the
@@ -268,7 +286,7 @@ impl<'a> FrameRun<'a> {
                 colour: buffers.ids,
             },
             _ => DepthTarget::Copy {
-                frame: self.target,
+                frame: self.copy_from,
                 texture,
             },
         };
@@ -299,7 +317,7 @@ impl<'a> FrameRun<'a> {
             None => passes::shadow_map::render(&self.ctx, depth_program, &view, &target),
         }
         let copy = !through_fbo;
-        let fbo_of_frame = self.target.fbo;
+        let fbo_of_frame = self.copy_from.fbo;
         go_on!(self.step(StepKind::LightView, Some(lp), shown, |_| {
             // An ID buffer shows its IDs; a priority buffer's depth is its priority ramp.
             if let Some(ids) = buffers.ids {
@@ -315,7 +333,7 @@ impl<'a> FrameRun<'a> {
         if copy {
             self.timer
                 .begin(gl, PassId::light(lp.light, Stage::DepthCopy));
-            copy_depth(gl, self.target, texture, size, face);
+            copy_depth(gl, self.copy_from, texture, size, face);
             go_on!(self.step(StepKind::DepthCopy, Some(lp), shown, |_| {
                 let depth = debug::read_depth_texture(gl, texture, face, size);
                 debug::depth_image(&depth, size, size)

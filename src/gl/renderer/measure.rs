@@ -5,7 +5,7 @@ impl<'a> FrameRun<'a> {
     /// The G-buffer and each light's decision mask, when the request asks for masks
     /// (untimed, after the frame).
     pub(super) fn measure(
-        &self,
+        &mut self,
         maps: &[ViewMap],
     ) -> (Option<GBuffer>, Vec<Mask>, Vec<HybridStats>) {
         let gl = self.ctx.gl;
@@ -19,6 +19,13 @@ impl<'a> FrameRun<'a> {
         let gbuffer = read_gbuffer(gl, gtarget);
         let mut masks = Vec::with_capacity(plan.lights.len() + plan.culled.len());
         for (pi, lp) in plan.lights.iter().enumerate() {
+            let own;
+            let maps = if plan.maps_per_light && lp.technique.uses_maps() {
+                own = self.maps_again(pi);
+                &own[..]
+            } else {
+                maps
+            };
             mtarget.bind(gl);
             set_scissor(gl, None);
             // SAFETY: clears the mask to "not a receiver"; depth and stencil untouched.
@@ -90,6 +97,26 @@ impl<'a> FrameRun<'a> {
         }
         masks.sort_by_key(|m| m.light);
         (Some(gbuffer), masks, hybrid_stats)
+    }
+
+    /// Light `pi`'s maps for its mask when each light's were drawn before its pass: drawn
+    /// again where a later light took their textures over, untimed, uncounted and outside
+    /// the frame's steps.
+    fn maps_again(&mut self, pi: usize) -> Vec<ViewMap> {
+        let (cache, steps, shown) = (self.cache, self.stepper.steps.len(), self.last_maps.len());
+        let stop = self.stepper.stop.take();
+        self.timer.start_frame(false);
+        self.shadow_maps.next_stamp();
+        let maps = match self.light_maps(pi) {
+            Ok(ControlFlow::Continue(maps)) => maps,
+            // No step stops it; a GL error leaves the light's mask as the map stood.
+            _ => Vec::new(),
+        };
+        self.cache = cache;
+        self.stepper.steps.truncate(steps);
+        self.stepper.stop = stop;
+        self.last_maps.truncate(shown);
+        maps
     }
 
     /// Light `lp`'s mask where its stencil is zero, after its volumes or fragments.

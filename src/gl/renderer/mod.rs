@@ -30,6 +30,7 @@ use crate::options::{
     Compare, CompareResult, DepthBits, Filter, MapBuffer, Outside, StencilPasses, StencilWrap,
     Technique, TexgenSpace, VolumeShading,
 };
+use crate::plan::map_memory;
 use crate::plan::occlusion::DepthPyramid;
 use crate::plan::pass::{PassId, Stage};
 use crate::plan::scissor::Scissor;
@@ -187,6 +188,9 @@ pub struct Drawer {
     /// The legacy entry points, on a compatibility-profile context (`gl.pipeline =
     /// fixed_function`).
     fixed: Option<FixedFunction>,
+    /// Where maps drawn between lights' passes are copied from (`Plan::maps_per_light` with
+    /// `shadow_map.depth_source = copy`); made on first use.
+    map_scratch: Option<Framebuffer>,
 }
 
 /// The frame's colour buffer as a texture ([`Drawer::frame_texture`]).
@@ -262,6 +266,7 @@ impl Drawer {
             depth_reducer: None,
             last_maps: Vec::new(),
             fixed: None,
+            map_scratch: None,
         })
     }
 
@@ -290,6 +295,24 @@ impl Drawer {
         self.shadow_maps.texture_count()
     }
 
+    /// Deletes what frames kept for later frames (maps, volume buffers, extruded meshes,
+    /// fragments): the next frame makes what it needs afresh. The scene stays loaded.
+    pub fn release_kept(&mut self) {
+        let gl = self.gl.clone();
+        let budget = self.shadow_maps.budget();
+        self.shadow_maps.delete(&gl);
+        self.shadow_maps = ShadowMaps::default();
+        self.shadow_maps.set_budget(budget);
+        self.volume_buffers.delete(&gl);
+        self.extrusions.delete(&gl);
+        self.fragments.delete(&gl);
+    }
+
+    /// Bytes the shadow-map textures hold together.
+    pub fn shadow_map_bytes(&self) -> u64 {
+        self.shadow_maps.bytes()
+    }
+
     /// Uploads a scene, replacing the previous one.
     pub fn load_scene(&mut self, scene: &Scene) -> Result<(), RenderError> {
         if let Some(old) = self.gpu.take() {
@@ -297,13 +320,31 @@ impl Drawer {
         }
         let gpu = GpuScene::new(&self.gl, scene, self.caps.max_texture_size.max(1) as u32)
             .map_err(RenderError::Gl)?;
+        self.use_scene(gpu);
+        Ok(())
+    }
+
+    /// Uploads `scene`, which `other` (a renderer on this one's context) has loaded, sharing
+    /// its textures and lightmaps rather than copying them.
+    pub fn load_scene_beside(&mut self, scene: &Scene, other: &Drawer) -> Result<(), RenderError> {
+        let Some(theirs) = other.gpu.as_ref() else {
+            return Err(RenderError::NoScene);
+        };
+        if let Some(old) = self.gpu.take() {
+            old.delete(&self.gl);
+        }
+        let gpu = GpuScene::sharing_images(&self.gl, scene, theirs).map_err(RenderError::Gl)?;
+        self.use_scene(gpu);
+        Ok(())
+    }
+
+    fn use_scene(&mut self, gpu: GpuScene) {
         self.gpu = Some(gpu);
         // Cached maps and volumes belong to the old scene.
         self.shadow_maps.forget();
         self.volume_buffers.delete(&self.gl);
         self.extrusions.delete(&self.gl);
         self.fragments.delete(&self.gl);
-        Ok(())
     }
 
     /// Uploads what a light's volume draws hold for upload, outside a frame
@@ -407,6 +448,11 @@ impl Drawer {
             empty_vao: self.empty_vao,
             request,
             copy,
+            copy_from: match (plan.maps_per_light, &self.map_scratch) {
+                (true, Some(scratch)) => scratch,
+                _ => &self.target,
+            },
+            map_kinds: Vec::new(),
             stepper: Stepper {
                 stop: request.stop_after,
                 steps: Vec::new(),
@@ -444,13 +490,20 @@ impl Drawer {
         let sm = &settings.shadow_map;
         let copy = plan.any_maps() && copies_from_frame(sm);
         let largest = plan.largest_map(sm.size);
-        let alloc = if copy { (largest, largest) } else { (0, 0) };
-        self.ensure_target(
-            plan.camera.width,
-            plan.camera.height,
-            alloc,
-            copy && sm.depth_bits == DepthBits::D32f,
-        )?;
+        let float_depth = copy && sm.depth_bits == DepthBits::D32f;
+        // Maps drawn before each light's pass come after the base pass: copies are then made
+        // from a framebuffer of their own, of the frame's formats, not from the frame.
+        let scratch = copy && plan.maps_per_light;
+        let alloc = if copy && !scratch {
+            (largest, largest)
+        } else {
+            (0, 0)
+        };
+        self.ensure_target(plan.camera.width, plan.camera.height, alloc, float_depth)?;
+        if scratch {
+            self.ensure_map_scratch(largest, float_depth)?;
+        }
+        self.shadow_maps.set_budget(map_memory::budget_bytes(sm));
         if request.masks && self.measure_targets.is_none() {
             let g = GBufferTarget::new(&self.gl, self.target.width, self.target.height)
                 .map_err(RenderError::Gl)?;
@@ -458,6 +511,23 @@ impl Drawer {
             self.measure_targets = Some((g, m));
         }
         Ok(copy)
+    }
+
+    /// The framebuffer maps are copied from when they are drawn between lights' passes:
+    /// `size`² at least, with the frame's depth format.
+    fn ensure_map_scratch(&mut self, size: u32, float_depth: bool) -> Result<(), RenderError> {
+        let fits = self
+            .map_scratch
+            .as_ref()
+            .is_some_and(|t| t.width >= size && t.height >= size && t.float_depth == float_depth);
+        if !fits {
+            let new = Framebuffer::with_storage(&self.gl, size, size, (size, size), float_depth)
+                .map_err(RenderError::Gl)?;
+            if let Some(old) = self.map_scratch.replace(new) {
+                old.delete(&self.gl);
+            }
+        }
+        Ok(())
     }
 
     /// The lit programs this frame may use, compiled on first use, by variant.
@@ -618,6 +688,11 @@ pub(crate) struct FrameRun<'a> {
     request: FrameRequest,
     /// Shadow maps are drawn into the frame and copied into their textures.
     copy: bool,
+    /// The framebuffer maps are drawn into and copied from when `copy`: the frame's own, or
+    /// a scratch one when each light's maps come just before its pass.
+    copy_from: &'a Framebuffer,
+    /// The kinds of texture the frame's maps were drawn into so far.
+    map_kinds: Vec<MapKey>,
     stepper: Stepper,
     cache: CacheStats,
     /// The thread's surface draw count when the frame began.
@@ -635,7 +710,7 @@ impl<'a> FrameRun<'a> {
     /// the request asks for besides (the image, masks); waits for the GL only where the caller
     /// wants pixels.
     pub(crate) fn end(
-        self,
+        mut self,
         maps: Vec<ViewMap>,
         stencil: Option<StencilImage>,
     ) -> Result<Frame, RenderError> {
@@ -780,6 +855,9 @@ impl Drop for Drawer {
         }
         self.programs.delete(gl);
         self.target.delete(gl);
+        if let Some(t) = self.map_scratch.take() {
+            t.delete(gl);
+        }
         self.shadow_maps.delete(gl);
         self.id_tables.delete(gl);
         self.volume_buffers.delete(gl);

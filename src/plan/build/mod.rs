@@ -113,15 +113,21 @@ impl Plan {
             StencilPasses::TwoPass => 2,
             StencilPasses::Separate => 1,
         };
-        Plan {
+        let mut plan = Plan {
             camera: camera_setup,
             visible,
             casters,
             lights,
             stencil,
             culled,
+            maps_per_light: false,
             stats,
-        }
+        };
+        let (per_light, bytes) = super::map_memory::maps_per_light(&plan, &options.shadow_map);
+        plan.maps_per_light = per_light;
+        plan.stats.maps_per_light = per_light;
+        plan.stats.map_bytes = bytes;
+        plan
     }
 }
 

@@ -21,11 +21,12 @@ use crate::scene::Scene;
 use crate::scene::path::PathKey;
 use crate::truth::sampled::{FrameSample, Interval};
 use crate::truth::{Counts, ExactMasks, Reference};
-use indicatif::{ProgressBar, ProgressStyle};
+use indicatif::ProgressBar;
 use serde::Serialize;
 use std::collections::{BTreeMap, HashMap};
 use std::time::Instant;
 
+mod interleave;
 mod stats;
 
 pub use stats::{Median, MsStats};
@@ -54,6 +55,10 @@ pub struct BenchSettings {
     pub motion: bool,
     /// Sample every n-th measured frame against the sampled reference (1: every frame).
     pub sample_every: usize,
+    /// With `interleave`: the MiB the round-robin renderers' shadow maps may hold together;
+    /// the configurations are then timed a group at a time (each with its baseline), the
+    /// renderers of one group dropped before the next is made. None: all at once.
+    pub memory_mb: Option<f32>,
 }
 
 impl BenchSettings {
@@ -637,67 +642,10 @@ impl<'a> Bench<'a> {
         }
         let mut m = pass_breakdown(self.renderer, scene, settings, options, &timed)?;
         m.prepared = prepared;
+        // The next configuration starts from the scene alone, not beside this one's maps
+        // and volumes (a sweep's memory is then its largest configuration's, not their sum).
+        self.renderer.release_kept();
         Ok(m)
-    }
-
-    /// Every configuration and every baseline they need, each on a renderer of its own sharing
-    /// this one's GL context, warmed up, then timed one frame each in turn (the order rotating
-    /// frame by frame), then broken down pass by pass. Keyed by `options_key`.
-    fn measure_interleaved(
-        &mut self,
-        configs: &[BenchConfig],
-        bar: &ProgressBar,
-    ) -> Result<HashMap<String, Measured>, RenderError> {
-        let (scene, settings) = (&mut self.scene, &self.settings);
-        let mut timed: Vec<(String, Options)> = Vec::new();
-        for c in configs {
-            let mut wanted = vec![c.options.clone()];
-            if c.options.technique != Technique::None {
-                wanted.push(Self::shadows_off(&c.options));
-            }
-            for o in wanted {
-                let key = options_key(&o);
-                if !timed.iter().any(|(k, _)| *k == key) {
-                    timed.push((key, o));
-                }
-            }
-        }
-        bar.set_message(format!("{} option sets, round-robin", timed.len()));
-        let mut renderers = Vec::with_capacity(timed.len());
-        let mut prepared = Vec::with_capacity(timed.len());
-        settings.pose(scene, 0);
-        let first = settings.camera(scene, 0);
-        for (_, o) in &timed {
-            let mut r = self.renderer.sibling(o.width, o.height)?;
-            r.load_scene(scene)?;
-            prepared.push(r.prepare(scene, o)?);
-            for _ in 0..settings.warmup {
-                r.render_at(scene, &first, o, FrameRequest::default())?;
-            }
-            renderers.push(r);
-        }
-        let mut frames: Vec<Vec<Timed>> = timed.iter().map(|_| Vec::new()).collect();
-        for i in 0..settings.frames.max(1) {
-            // Every configuration draws the same posed frame.
-            settings.pose(scene, i);
-            let camera = settings.camera(scene, i);
-            for k in 0..timed.len() {
-                let j = (k + i) % timed.len();
-                frames[j].push(time_frame(&mut renderers[j], scene, &camera, &timed[j].1)?);
-            }
-        }
-        let mut out = HashMap::new();
-        for ((((key, o), r), f), p) in timed
-            .into_iter()
-            .zip(&mut renderers)
-            .zip(&frames)
-            .zip(prepared)
-        {
-            let mut m = pass_breakdown(r, scene, settings, &o, f)?;
-            m.prepared = p;
-            out.insert(key, m);
-        }
-        Ok(out)
     }
 
     /// `options` with shadows off. The techniques' own groups are reset too: they do nothing
@@ -842,12 +790,7 @@ impl<'a> Bench<'a> {
     /// Measures every configuration, with a progress bar when the settings ask for one.
     pub fn run(&mut self, configs: &[BenchConfig]) -> Result<Vec<BenchRow>, RenderError> {
         let bar = if self.settings.progress {
-            let b = ProgressBar::new(configs.len() as u64);
-            b.set_style(
-                ProgressStyle::with_template("{bar:30} {pos}/{len} configurations  {msg}")
-                    .unwrap_or_else(|_| ProgressStyle::default_bar()),
-            );
-            b
+            crate::report::progress::bar(configs.len(), "configurations")
         } else {
             ProgressBar::hidden()
         };

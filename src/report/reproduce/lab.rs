@@ -54,6 +54,7 @@ impl<'a> Lab<'a> {
                 // The scene as loaded: these measure techniques, not motion.
                 motion: false,
                 sample_every: 1,
+                memory_mb: None,
             },
         );
         Lab {

@@ -30,7 +30,7 @@ use crate::run::{RenderError, Renderer};
 use crate::scene::Scene;
 use crate::scene_file::SceneFileError;
 use crate::scene_file::load::{LoadError, Loaded, load_file};
-use indicatif::{ProgressBar, ProgressStyle};
+use indicatif::ProgressBar;
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -236,13 +236,11 @@ fn progress_bar(settings: &Settings, units: usize) -> ProgressBar {
     if !settings.progress {
         return ProgressBar::hidden();
     }
-    let b = ProgressBar::new(units as u64);
-    b.set_style(
-        ProgressStyle::with_template(
-            "reproduce [{elapsed_precise}] {bar:30} {pos}/{len} sections  {msg}",
-        )
-        .unwrap_or_else(|_| ProgressStyle::default_bar()),
-    );
+    let b =
+        ProgressBar::with_draw_target(Some(units as u64), crate::report::progress::draw_target());
+    b.set_style(crate::report::progress::style(
+        "reproduce [{elapsed_precise}] {bar:30} {pos}/{len} sections, {eta} left, {peak}  {msg}",
+    ));
     b
 }
 

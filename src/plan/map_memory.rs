@@ -1,0 +1,115 @@
+//! What shadow maps hold in memory, and whether a frame's maps fit `shadow_map.budget_mb`:
+//! the planner decides from it whether every light's maps are drawn first (they fit) or each
+//! light's just before its own pass (they do not); the GL layer counts its textures with the
+//! same sizes, so the two agree on what "fits" means.
+
+use super::{LightPlan, Plan};
+use crate::options::{DepthBits, MapBuffer, ShadowMapOptions};
+use crate::shadow::views::ViewKind;
+
+/// Bytes of one depth texel of `bits` as drivers store it (24-bit depth in 32-bit words).
+fn depth_texel_bytes(bits: DepthBits) -> u64 {
+    match bits {
+        DepthBits::D16 => 2,
+        DepthBits::D24 | DepthBits::D32f => 4,
+    }
+}
+
+/// Bytes of a depth texture: `size`² (six faces for a cube) at `levels` mip levels.
+pub fn depth_texture_bytes(cube: bool, size: u32, bits: DepthBits, levels: u32) -> u64 {
+    let faces = if cube { 6 } else { 1 };
+    let texels: u64 = (0..levels.max(1))
+        .map(|l| u64::from((size >> l).max(1)).pow(2))
+        .sum();
+    faces * texels * depth_texel_bytes(bits)
+}
+
+/// Bytes of an ID buffer's colour texture of side `size` (RGBA8).
+pub fn id_texture_bytes(size: u32) -> u64 {
+    u64::from(size).pow(2) * 4
+}
+
+/// Mip levels of a map of side `size` with a priority buffer's chain.
+fn chain_levels(size: u32) -> u32 {
+    32 - size.max(1).leading_zeros()
+}
+
+/// Bytes of light `lp`'s maps: each view's texture, its static map where it has one, and
+/// its ID buffer's colour where it stores IDs.
+pub fn light_map_bytes(lp: &LightPlan, o: &ShadowMapOptions) -> u64 {
+    if !lp.technique.uses_maps() {
+        return 0;
+    }
+    let mipmapped = lp.buffer == MapBuffer::Priority && o.priority_mipmap;
+    lp.views
+        .iter()
+        .enumerate()
+        .map(|(vi, view)| {
+            let cube = view.kind == ViewKind::Cube;
+            let size = view.map_size(o.size);
+            let levels = if mipmapped && !cube {
+                chain_levels(size)
+            } else {
+                1
+            };
+            let map = depth_texture_bytes(cube, size, o.depth_bits, levels);
+            let statics = lp
+                .view_static_keys
+                .get(vi)
+                .copied()
+                .flatten()
+                .map_or(0, |_| map);
+            let ids = if lp.buffer == MapBuffer::Id {
+                id_texture_bytes(size)
+            } else {
+                0
+            };
+            map + statics + ids
+        })
+        .sum()
+}
+
+/// The budget in bytes, or `None` for no limit (`budget_mb = 0`).
+pub fn budget_bytes(o: &ShadowMapOptions) -> Option<u64> {
+    (o.budget_mb > 0.0).then(|| (f64::from(o.budget_mb) * 1048576.0) as u64)
+}
+
+/// Whether the frame draws each light's maps just before its own pass: its maps together
+/// hold more than the budget. Bytes of the frame's maps together beside it.
+pub fn maps_per_light(plan: &Plan, o: &ShadowMapOptions) -> (bool, u64) {
+    let bytes: u64 = plan.lights.iter().map(|lp| light_map_bytes(lp, o)).sum();
+    (budget_bytes(o).is_some_and(|b| bytes > b), bytes)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn texture_sizes() {
+        // A 2048-texel cube of 24-bit depth: 6 × 2048² × 4 bytes, about 100 MB.
+        assert_eq!(
+            depth_texture_bytes(true, 2048, DepthBits::D24, 1),
+            6 * 2048 * 2048 * 4
+        );
+        assert_eq!(
+            depth_texture_bytes(false, 512, DepthBits::D16, 1),
+            512 * 512 * 2
+        );
+        // A full chain of a 4-texel map: 16 + 4 + 1 texels.
+        assert_eq!(chain_levels(4), 3);
+        assert_eq!(depth_texture_bytes(false, 4, DepthBits::D32f, 3), 21 * 4);
+        assert_eq!(id_texture_bytes(256), 256 * 256 * 4);
+    }
+
+    #[test]
+    fn no_budget_at_zero() {
+        let mut o = ShadowMapOptions {
+            budget_mb: 0.0,
+            ..ShadowMapOptions::default()
+        };
+        assert_eq!(budget_bytes(&o), None);
+        o.budget_mb = 1.5;
+        assert_eq!(budget_bytes(&o), Some(1572864));
+    }
+}

@@ -1,0 +1,123 @@
+//! `shadow_map.budget_mb`: a frame whose maps would hold more than the budget draws each
+//! light's maps just before its own pass, into textures the lights share. It must draw the
+//! same image and masks as the frame that draws every map first, and hold no more than one
+//! light's maps when the budget is smaller than any light's.
+
+mod common;
+
+use common::{image_difference, load_scene_file};
+use shadowlab::frame::Frame;
+use shadowlab::options::{BackendChoice, Options};
+use shadowlab::plan::Plan;
+use shadowlab::plan::map_memory::light_map_bytes;
+use shadowlab::run::{FrameRequest, Renderer};
+use shadowlab::scene::Scene;
+
+/// The frame with masks, and the bytes of map textures the renderer holds after it.
+fn frame_and_held(r: &mut Renderer, scene: &Scene, o: &Options) -> (Frame, u64) {
+    let request = FrameRequest {
+        masks: true,
+        ..FrameRequest::default()
+    };
+    let frame = r
+        .render_with(scene, o, request)
+        .unwrap_or_else(|e| panic!("{e}"));
+    (frame, r.held().map_bytes)
+}
+
+#[test]
+fn maps_drawn_per_light_within_the_budget_draw_the_frame_of_every_map_first() {
+    let (scene, _, base) = load_scene_file("oa_dm1");
+    let cases: [&[&str]; 5] = [
+        // The paper's copies from the frame's depth (here from a scratch framebuffer).
+        &["technique=shadow_map"],
+        &["technique=shadow_map", "shadow_map.depth_source=fbo"],
+        &[
+            "technique=shadow_map",
+            "shadow_map.omni=cube",
+            "shadow_map.size=1024",
+        ],
+        &["technique=hybrid", "shadow_map.depth_source=fbo"],
+        &[
+            "technique=shadow_map",
+            "shadow_map.buffer=id",
+            "shadow_map.depth_source=fbo",
+        ],
+    ];
+    for sets in cases {
+        let mut o = base.clone();
+        for s in sets {
+            o.set_assignment(s).unwrap_or_else(|e| panic!("{e}"));
+        }
+        o.width = 320;
+        o.height = 240;
+        let (_ctx, mut r) = common::gl_on(BackendChoice::Egl, &o);
+        r.load_scene(&scene).unwrap();
+        let mut all_first = o.clone();
+        all_first.shadow_map.budget_mb = 0.0;
+        let (a, _) = frame_and_held(&mut r, &scene, &all_first);
+        assert!(
+            !a.plan_stats.maps_per_light,
+            "{sets:?}: no budget, every map first"
+        );
+        // A budget below any one light's maps: every light takes the textures over.
+        let mut budget = o.clone();
+        budget.shadow_map.budget_mb = 0.01;
+        let (_ctx2, mut r2) = common::gl_on(BackendChoice::Egl, &o);
+        r2.load_scene(&scene).unwrap();
+        // Twice: the second frame finds the textures the first left to another light.
+        for frame in 0..2 {
+            let (b, held) = frame_and_held(&mut r2, &scene, &budget);
+            assert!(b.plan_stats.maps_per_light, "{sets:?}: over the budget");
+            let (max, differing) = image_difference(&a, &b);
+            assert_eq!(
+                differing, 0,
+                "{sets:?} frame {frame}: {differing} pixels differ (by up to {max})"
+            );
+            assert_eq!(a.masks.len(), b.masks.len());
+            for (ma, mb) in a.masks.iter().zip(&b.masks) {
+                let d = common::differing(ma, mb);
+                assert_eq!(d, 0, "{sets:?} frame {frame}: light {}'s mask", ma.light);
+            }
+            let plan = Plan::build(&scene, &budget);
+            let largest = plan
+                .lights
+                .iter()
+                .map(|lp| light_map_bytes(lp, &budget.shadow_map))
+                .max()
+                .unwrap_or(0);
+            assert!(largest > 0, "{sets:?}: some light has maps");
+            assert!(
+                held <= largest,
+                "{sets:?} frame {frame}: {held} bytes of maps held, one light's largest {largest}"
+            );
+        }
+        assert!(
+            r.held().map_bytes > r2.held().map_bytes,
+            "{sets:?}: every map first holds more"
+        );
+    }
+}
+
+#[test]
+fn a_renderer_released_between_configurations_holds_nothing_and_draws_the_same() {
+    let (scene, _, mut o) = load_scene_file("oa_dm1");
+    o.width = 320;
+    o.height = 240;
+    let (_ctx, mut r) = common::gl_on(BackendChoice::Egl, &o);
+    r.load_scene(&scene).unwrap();
+    let mut maps = o.clone();
+    maps.set_assignment("technique=shadow_map").unwrap();
+    let mut volumes = o.clone();
+    volumes.set_assignment("technique=shadow_volume").unwrap();
+    let first = r.render(&scene, &maps).unwrap();
+    r.render(&scene, &volumes).unwrap();
+    let held = r.held();
+    assert!(held.map_textures > 0 && held.map_bytes > 0, "{held:?}");
+    assert!(held.volume_parts > 0, "{held:?}");
+    r.release_kept();
+    assert_eq!(r.held(), shadowlab::run::Held::default());
+    let again = r.render(&scene, &maps).unwrap();
+    let (max, differing) = image_difference(&first, &again);
+    assert_eq!(differing, 0, "{differing} pixels differ by up to {max}");
+}
