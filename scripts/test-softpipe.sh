@@ -3,7 +3,8 @@
 # rasteriser, softpipe (GL 3.3 core with EXT_depth_bounds_test, 3-6 times slower than
 # llvmpipe): context paths, fallbacks, the depth-bounds test where it runs, the fixed-function
 # pipeline, EGL against OSMesa and the window, the README's figures, and the built-in scene's
-# shadow volumes and maps (with the texgen precision case on oa_dm3). .ci/run runs it after the
+# shadow volumes and maps (with the texgen precision case on oa_dm3), maps drawn per light within
+# the map budget. .ci/run runs it after the
 # README's test command; docs/drivers.md says what differs between the drivers.
 #
 #   scripts/test-softpipe.sh            (after a release build of the tests, or it builds them)
@@ -34,4 +35,5 @@ run foundation
 run cli
 run shadow_volume
 run shadow_map -- copy_and_fbo hardware_and_shader alpha_and_intensity light_relative_texgen
+run map_budget
 echo "== softpipe pass: $(( $(date +%s) - total )) s"
