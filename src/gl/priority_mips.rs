@@ -7,11 +7,6 @@
 use super::program::Program;
 use glow::HasContext;
 
-/// Mip levels of a map of side `size`, down to one texel.
-pub fn levels(size: u32) -> u32 {
-    32 - size.max(1).leading_zeros()
-}
-
 /// The side of level `level` of a map of side `size`.
 pub fn level_size(size: u32, level: u32) -> u32 {
     (size >> level).max(1)
@@ -97,6 +92,14 @@ mod tests {
 
     #[test]
     fn levels_reach_one_texel() {
+        let levels = |size| {
+            crate::plan::map_memory::view_levels(
+                crate::options::MapBuffer::Priority,
+                true,
+                false,
+                size,
+            )
+        };
         assert_eq!(levels(1), 1);
         assert_eq!(levels(2048), 12);
         assert_eq!(levels(876), 10);

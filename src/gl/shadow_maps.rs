@@ -154,11 +154,6 @@ impl ShadowMaps {
         self.budget = budget;
     }
 
-    /// The budget the textures keep within (None: no limit).
-    pub fn budget(&self) -> Option<u64> {
-        self.budget
-    }
-
     /// Starts a new stamp: the textures used so far may be given up for those used next.
     pub fn next_stamp(&mut self) {
         self.stamp += 1;

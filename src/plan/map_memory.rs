@@ -29,9 +29,14 @@ pub fn id_texture_bytes(size: u32) -> u64 {
     u64::from(size).pow(2) * 4
 }
 
-/// Mip levels of a map of side `size` with a priority buffer's chain.
-fn chain_levels(size: u32) -> u32 {
-    32 - size.max(1).leading_zeros()
+/// Mip levels of a view's texture of side `size`: a priority buffer's chain down to one texel
+/// (`shadow_map.priority_mipmap`; never a cube: priority maps are six spots), else one.
+pub fn view_levels(buffer: MapBuffer, priority_mipmap: bool, cube: bool, size: u32) -> u32 {
+    if buffer == MapBuffer::Priority && priority_mipmap && !cube {
+        32 - size.max(1).leading_zeros()
+    } else {
+        1
+    }
 }
 
 /// Bytes of light `lp`'s maps: each view's texture, its static map where it has one, and
@@ -40,18 +45,13 @@ pub fn light_map_bytes(lp: &LightPlan, o: &ShadowMapOptions) -> u64 {
     if !lp.technique.uses_maps() {
         return 0;
     }
-    let mipmapped = lp.buffer == MapBuffer::Priority && o.priority_mipmap;
     lp.views
         .iter()
         .enumerate()
         .map(|(vi, view)| {
             let cube = view.kind == ViewKind::Cube;
             let size = view.map_size(o.size);
-            let levels = if mipmapped && !cube {
-                chain_levels(size)
-            } else {
-                1
-            };
+            let levels = view_levels(lp.buffer, o.priority_mipmap, cube, size);
             let map = depth_texture_bytes(cube, size, o.depth_bits, levels);
             let statics = lp
                 .view_static_keys
@@ -97,7 +97,9 @@ mod tests {
             512 * 512 * 2
         );
         // A full chain of a 4-texel map: 16 + 4 + 1 texels.
-        assert_eq!(chain_levels(4), 3);
+        assert_eq!(view_levels(MapBuffer::Priority, true, false, 4), 3);
+        assert_eq!(view_levels(MapBuffer::Priority, true, true, 4), 1);
+        assert_eq!(view_levels(MapBuffer::Depth, true, false, 4), 1);
         assert_eq!(depth_texture_bytes(false, 4, DepthBits::D32f, 3), 21 * 4);
         assert_eq!(id_texture_bytes(256), 256 * 256 * 4);
     }

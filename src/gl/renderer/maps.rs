@@ -94,8 +94,6 @@ impl<'a> FrameRun<'a> {
         let gl = self.ctx.gl;
         let sm = &self.ctx.settings.shadow_map;
         let (view, buffer) = (&lp.views[vi], lp.buffer);
-        // A priority buffer's mip chain (never a cube: priority maps are six spots).
-        let mipmapped = buffer == MapBuffer::Priority && sm.priority_mipmap;
         let cube = view.kind == ViewKind::Cube;
         let size = view.map_size(sm.size);
         let kind = MapKey {
@@ -103,11 +101,7 @@ impl<'a> FrameRun<'a> {
             size,
             bits: sm.depth_bits,
             buffer,
-            levels: if mipmapped && !cube {
-                priority_mips::levels(size)
-            } else {
-                1
-            },
+            levels: map_memory::view_levels(buffer, sm.priority_mipmap, cube, size),
         };
         let (texture, mut holds) = self
             .shadow_maps

@@ -109,7 +109,8 @@ impl<'a> FrameRun<'a> {
         self.shadow_maps.next_stamp();
         let maps = match self.light_maps(pi) {
             Ok(ControlFlow::Continue(maps)) => maps,
-            // No step stops it; a GL error leaves the light's mask as the map stood.
+            // No step stops it (`stop` is taken); on a GL error the mask is drawn without the
+            // light's maps, and the frame's next error check reports it.
             _ => Vec::new(),
         };
         self.cache = cache;

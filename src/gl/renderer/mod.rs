@@ -298,14 +298,10 @@ impl Drawer {
     /// Deletes what frames kept for later frames (maps, volume buffers, extruded meshes,
     /// fragments): the next frame makes what it needs afresh. The scene stays loaded.
     pub fn release_kept(&mut self) {
-        let gl = self.gl.clone();
-        let budget = self.shadow_maps.budget();
-        self.shadow_maps.delete(&gl);
+        // The next frame sets the maps' budget again.
+        self.shadow_maps.delete(&self.gl);
         self.shadow_maps = ShadowMaps::default();
-        self.shadow_maps.set_budget(budget);
-        self.volume_buffers.delete(&gl);
-        self.extrusions.delete(&gl);
-        self.fragments.delete(&gl);
+        self.delete_volume_work();
     }
 
     /// Bytes the shadow-map textures hold together.
@@ -342,6 +338,11 @@ impl Drawer {
         self.gpu = Some(gpu);
         // Cached maps and volumes belong to the old scene.
         self.shadow_maps.forget();
+        self.delete_volume_work();
+    }
+
+    /// Deletes the volume buffers, extruded meshes and subdivision fragments frames kept.
+    fn delete_volume_work(&mut self) {
         self.volume_buffers.delete(&self.gl);
         self.extrusions.delete(&self.gl);
         self.fragments.delete(&self.gl);
