@@ -98,7 +98,7 @@ impl Syncs {
 }
 
 /// What the frame reused from earlier frames.
-#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize)]
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize, serde::Deserialize)]
 pub struct CacheStats {
     /// Shadow maps (views: a spot, a face of six spots, a cube) whose content was made this
     /// frame in any way: drawn whole, or from their static map (the two counts below).

@@ -11,7 +11,7 @@ use serde::Serialize;
 use thiserror::Error;
 
 /// A named set of option values.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, serde::Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum Preset {
     Default,
@@ -59,7 +59,7 @@ const PAPER: &[(&str, &str)] = &[
 ];
 
 /// One option whose value differs from a preset's.
-#[derive(Debug, Clone, PartialEq, Serialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, serde::Deserialize)]
 pub struct Difference {
     pub key: String,
     pub value: String,

@@ -115,7 +115,12 @@ fn es3_draws_into_the_map_instead_of_copying_depth_and_reduces_depth_instead_of_
     let sv = "technique=shadow_volume";
     let whole = es.measure(&options_with(&[sv, "plan.reduce_depth=false"]));
     let reduced = es.measure(&options_with(&[sv, "plan.reduce_depth=true"]));
-    let taken: Vec<_> = whole.frame.fallbacks.iter().map(|f| f.feature).collect();
+    let taken: Vec<&str> = whole
+        .frame
+        .fallbacks
+        .iter()
+        .map(|f| f.feature.as_ref())
+        .collect();
     assert!(taken.contains(&"depth_read"), "{taken:?}");
     for l in 0..2 {
         assert_eq!(whole.mask(l).values, reduced.mask(l).values, "light {l}");

@@ -65,10 +65,14 @@ fn the_extension_where_present_and_its_emulation_give_the_same_masks() {
             .fallbacks
             .iter()
             .filter(|f| f.feature == "depth_bounds")
-            .map(|f| (f.option, f.asked.clone(), f.used.clone()))
+            .map(|f| (f.option.to_string(), f.asked.clone(), f.used.clone()))
             .collect::<Vec<_>>()
     };
-    let fallback = vec![("plan.depth_bounds_test", "true".into(), "false".into())];
+    let fallback = vec![(
+        "plan.depth_bounds_test".to_string(),
+        "true".into(),
+        "false".into(),
+    )];
     assert_eq!(listed(&emulated), fallback);
     assert_eq!(sum(&emulated, |v| v.parts_depth_bounded), 0);
     assert!(sum(&emulated, |v| v.parts_depth_clipped) > 0);

@@ -91,7 +91,12 @@ fn every_disabled_feature_falls_back_and_renders_what_its_fallback_renders() {
         // Nothing hidden: the frame replaces nothing where this GL has the feature, and lists
         // the same fallback where it lacks it (softpipe fails the primitive_id probe). Hiding a
         // missing feature then adds nothing, and the frame as asked must already be the fallback.
-        let own: Vec<_> = as_asked.frame.fallbacks.iter().map(|f| f.feature).collect();
+        let own: Vec<&str> = as_asked
+            .frame
+            .fallbacks
+            .iter()
+            .map(|f| f.feature.as_ref())
+            .collect();
         assert_eq!(own.contains(&feature), !gl_has, "{feature}: {own:?}");
         if !gl_has {
             println!("this GL lacks {feature}: its own fallback checked");

@@ -162,7 +162,7 @@ fn fixed_function_replaces_what_it_cannot_draw_and_says_so() {
         .fallbacks
         .iter()
         .filter(|f| f.feature == "fixed_function")
-        .map(|f| f.option)
+        .map(|f| f.option.as_ref())
         .collect();
     for option in ["shadow_map.filter", "shadow_map.omni", "plan.omni_cube"] {
         assert!(

@@ -94,7 +94,7 @@ fn standard_map_as_run(warped: &Measured, sets: &[&str]) -> Options {
     let mut o = options_with(sets);
     for f in &warped.frame.fallbacks {
         if f.option == "shadow_map.offset_factor" {
-            o.set(f.option, &f.used).unwrap_or_else(|e| panic!("{e}"));
+            o.set(&f.option, &f.used).unwrap_or_else(|e| panic!("{e}"));
         }
     }
     o

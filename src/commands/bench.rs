@@ -3,9 +3,11 @@
 use super::{CommonArgs, camera_path, load, start_gl};
 use anyhow::{Context, Result, bail};
 use shadowlab::options::Technique;
-use shadowlab::report::bench::{Bench, BenchSettings, sweep_configs};
+use shadowlab::report::bench::{Bench, BenchConfig, BenchRow, BenchSettings, sweep_configs};
+use shadowlab::report::shard::{Manifest, Shard};
+use shadowlab::report::store::RowStore;
 use shadowlab::report::{plot, table};
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 #[derive(clap::Args)]
 pub struct Args {
@@ -46,6 +48,20 @@ pub struct Args {
     /// ratios steady when the machine's speed drifts.
     #[arg(long)]
     sequential: bool,
+    /// Measure only shard K of N of the configurations (`K/N`: every N-th of the sweep's
+    /// order from the K-th), for sweeps spread over processes or machines; with `--out`,
+    /// `shadowlab merge` joins the parts.
+    #[arg(long, value_name = "K/N")]
+    shard: Option<String>,
+    /// Write the rows to DIR/rows.json and the plot to DIR/bench.png, with the manifest
+    /// `shadowlab merge` reads (DIR/shard.json).
+    #[arg(long, value_name = "DIR")]
+    out: Option<PathBuf>,
+    /// Keep each measured configuration in DIR by content (the code, GL, scene, options and
+    /// frame settings): a sweep run again, or resumed after an interruption, measures only
+    /// what DIR lacks. A rebuilt binary measures everything anew.
+    #[arg(long, value_name = "DIR")]
+    keep: Option<PathBuf>,
     /// Write the rows as a JSON array.
     #[arg(long)]
     json: Option<PathBuf>,
@@ -91,7 +107,15 @@ pub fn run(common: &CommonArgs, args: &Args) -> Result<()> {
             options.technique = t;
         }
     }
-    let configs = sweep_configs(&options, &sweeps)?;
+    let all = sweep_configs(&options, &sweeps)?;
+    let shard = match &args.shard {
+        Some(s) => Shard::parse(s)?,
+        None => Shard::WHOLE,
+    };
+    let configs: Vec<BenchConfig> = (0..all.len())
+        .filter(|&i| shard.takes(i))
+        .map(|i| all[i].clone())
+        .collect();
     let path = match args.path.as_deref() {
         Some("still") => None,
         Some(p) => Some(p.to_string()),
@@ -131,29 +155,73 @@ pub fn run(common: &CommonArgs, args: &Args) -> Result<()> {
         sample_every: args.sample_every.unwrap_or(if recorded { 4 } else { 1 }),
         memory_mb: args.memory_mb,
     };
-    let rows = Bench::new(&mut renderer, &scene, settings).run(&configs)?;
-    println!("{}", table::markdown(&rows));
+    let manifest = Manifest {
+        command: "bench".into(),
+        shard,
+        units: all.iter().map(BenchConfig::label).collect(),
+        settings: format!(
+            "{} {options} {:?} {}",
+            scene.name,
+            settings,
+            renderer.caps().renderer
+        ),
+        version: env!("CARGO_PKG_VERSION").into(),
+    };
+    let mut bench = Bench::new(&mut renderer, &scene, settings);
+    if let Some(dir) = &args.keep {
+        let store = RowStore::on_disk(dir)
+            .with_context(|| format!("cannot keep rows in {}", dir.display()))?;
+        bench = bench.with_store(store);
+    }
+    let rows = bench.run(&configs)?;
+    if args.keep.is_some() {
+        eprintln!("{}", bench.store().summary());
+    }
+    if let Some(dir) = &args.out {
+        manifest.write(dir)?;
+        std::fs::write(dir.join(ROWS), serde_json::to_string_pretty(&rows)?)
+            .with_context(|| format!("cannot write {}", dir.join(ROWS).display()))?;
+    }
+    let title = format!(
+        "{}: error against frame time ({}x{})",
+        scene.name, options.width, options.height
+    );
+    let plot_path = args
+        .plot
+        .clone()
+        .unwrap_or_else(|| match (&args.out, &args.json) {
+            (Some(dir), _) => dir.join("bench.png"),
+            (None, Some(j)) => j.with_extension("png"),
+            (None, None) => PathBuf::from("bench.png"),
+        });
+    write_outputs(&rows, args.json.as_deref(), &title, &plot_path)
+}
+
+/// The rows' file name in `--out`'s folder.
+pub const ROWS: &str = "rows.json";
+
+/// What a bench run writes: the table (and the per-frame errors where they fit) on stdout,
+/// the rows as JSON where asked, and the plot.
+pub fn write_outputs(
+    rows: &[BenchRow],
+    json: Option<&Path>,
+    title: &str,
+    plot_path: &Path,
+) -> Result<()> {
+    println!("{}", table::markdown(rows));
     // Frame by frame only where it fits on a screen; the JSON holds every frame.
     if rows
         .iter()
         .any(|r| r.sampled.as_ref().is_some_and(|p| p.frames.len() <= 32))
     {
-        println!("{}", table::path_error_table(&rows).to_markdown());
+        println!("{}", table::path_error_table(rows).to_markdown());
     }
-    if let Some(json) = &args.json {
-        std::fs::write(json, serde_json::to_string_pretty(&rows)?)
+    if let Some(json) = json {
+        std::fs::write(json, serde_json::to_string_pretty(rows)?)
             .with_context(|| format!("cannot write {}", json.display()))?;
         eprintln!("wrote {}", json.display());
     }
-    let plot_path = args.plot.clone().unwrap_or_else(|| match &args.json {
-        Some(j) => j.with_extension("png"),
-        None => PathBuf::from("bench.png"),
-    });
-    let title = format!(
-        "{}: error against frame time ({}x{})",
-        scene.name, options.width, options.height
-    );
-    plot::error_vs_time(&rows, &title, &plot_path).map_err(anyhow::Error::msg)?;
+    plot::error_vs_time(rows, title, plot_path).map_err(anyhow::Error::msg)?;
     eprintln!("wrote {}", plot_path.display());
     Ok(())
 }

@@ -106,7 +106,7 @@ pub fn run(common: &CommonArgs, args: &Args) -> Result<()> {
             r.option,
             r.asked,
             r.used,
-            match r.feature {
+            match r.feature.as_ref() {
                 "fixed_function" => "the fixed-function pipeline cannot draw it".to_string(),
                 f => format!("no {f}"),
             }

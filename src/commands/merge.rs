@@ -1,8 +1,10 @@
 //! `shadowlab merge`: the parts of a sharded run (`--shard K/N --out DIR`) joined into what one
 //! run writes, after checking they are all of it exactly once and were made alike.
 
+use super::bench::{ROWS, write_outputs};
 use super::check::{LINES, failures};
 use anyhow::{Context, Result, bail};
+use shadowlab::report::bench::BenchRow;
 use shadowlab::report::shard::{self, Manifest, ShardError};
 use std::io::Write;
 use std::path::PathBuf;
@@ -21,8 +23,35 @@ pub fn run(args: &Args) -> Result<()> {
     let (whole, parts) = shard::complete_run(&args.parts)?;
     match whole.command.as_str() {
         "check" => merge_check(&whole, &parts, args.out.as_ref()),
+        "bench" => merge_bench(&whole, &parts, args.out.as_ref()),
         other => bail!("cannot merge parts of `{other}`"),
     }
+}
+
+/// `bench`'s rows in the sweep's order: its table on stdout and, in `out`, its rows and plot
+/// (as `bench --out` writes them).
+fn merge_bench(whole: &Manifest, parts: &[PathBuf], out: Option<&PathBuf>) -> Result<()> {
+    let mut rows: Vec<BenchRow> = Vec::new();
+    for dir in parts {
+        let path = dir.join(ROWS);
+        let text = std::fs::read_to_string(&path)
+            .map_err(|e| ShardError::Read(path.clone(), e.to_string()))?;
+        let part: Vec<BenchRow> = serde_json::from_str(&text)
+            .with_context(|| format!("{}: not bench rows", path.display()))?;
+        rows.extend(part);
+    }
+    let rows = shard::in_run_order(&whole.units, rows, |r| r.label.clone())?;
+    let scene = rows.first().map(|r| r.scene.clone()).unwrap_or_default();
+    let (w, h) = rows.first().map_or((0, 0), |r| (r.width, r.height));
+    let title = format!("{scene}: error against frame time ({w}x{h})");
+    let (json, plot) = match out {
+        Some(dir) => {
+            whole.write(dir)?;
+            (Some(dir.join(ROWS)), dir.join("bench.png"))
+        }
+        None => (None, PathBuf::from("bench.png")),
+    };
+    write_outputs(&rows, json.as_deref(), &title, &plot)
 }
 
 /// `check`'s JSON lines, one per map in the run's order, on stdout (and in `out`).

@@ -23,6 +23,14 @@ pub struct Args {
     /// Unmeasured frames before each configuration (default 1, 0 with --quick).
     #[arg(long)]
     warmup: Option<usize>,
+    /// Where measured configurations are kept by content (the code, GL, scene, options and
+    /// frame settings), so that a run interrupted or run again measures only what it lacks
+    /// (default: OUT/rows). A rebuilt binary measures everything anew.
+    #[arg(long, value_name = "DIR")]
+    keep: Option<PathBuf>,
+    /// Measure everything anew and keep nothing on disk.
+    #[arg(long, conflicts_with = "keep")]
+    fresh: bool,
 }
 
 pub fn run(common: &CommonArgs, args: &Args) -> Result<()> {
@@ -45,6 +53,8 @@ pub fn run(common: &CommonArgs, args: &Args) -> Result<()> {
     settings.warmup = args.warmup.unwrap_or(settings.warmup);
     settings.sets = common.sets.clone();
     settings.progress = true;
+    settings.keep =
+        (!args.fresh).then(|| args.keep.clone().unwrap_or_else(|| args.out.join("rows")));
     // The context is made once for the whole run, on the chosen path.
     let mut options = Options::default();
     if let Some(b) = &common.backend {
@@ -74,5 +84,6 @@ pub fn run(common: &CommonArgs, args: &Args) -> Result<()> {
         report.rows.len(),
         report.elapsed_s / 60.0
     );
+    eprintln!("{}", report.reuse);
     Ok(())
 }

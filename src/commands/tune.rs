@@ -28,6 +28,9 @@ pub struct Args {
     /// Configurations measured in full at the end.
     #[arg(long, default_value_t = 8)]
     finalists: usize,
+    /// Measured frames of each finalist (round-robin).
+    #[arg(long, default_value_t = 8)]
+    final_frames: usize,
     /// Seed of the draw.
     #[arg(long, default_value_t = 1)]
     seed: u64,
@@ -146,6 +149,7 @@ pub fn run(common: &CommonArgs, args: &Args) -> Result<()> {
     let path = camera_path(&scene.camera, args.path.as_deref())?;
     let mut settings = TuneSettings::new(args.candidates.max(2), path);
     settings.finalists = args.finalists.max(1);
+    settings.final_frames = args.final_frames.max(1);
     settings.seed = args.seed;
     settings.per_light = !args.no_per_light;
     settings.accuracy = args.accuracy;
@@ -167,7 +171,7 @@ pub fn run(common: &CommonArgs, args: &Args) -> Result<()> {
     );
     let bar = ProgressBar::with_draw_target(Some(0), progress::draw_target());
     bar.set_style(progress::style(
-        "{prefix}: [{elapsed_precise}] {bar:30} {pos}/{len}, {eta} left, {peak}  {msg}",
+        "{prefix}: [{elapsed_precise}] {bar:30} {pos}/{len}, {left} left, {peak}  {msg}",
     ));
     let result = tune(&mut renderer, &scene, &options, &settings, &bar)?;
     bar.finish_and_clear();

@@ -32,10 +32,10 @@ pub const FEATURES: [&str; 12] = [
 pub const PER_VERTEX_OFFSET_FACTOR: f32 = 10.0;
 
 /// One option replaced because the GL lacks a feature.
-#[derive(Debug, Clone, PartialEq, Serialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, serde::Deserialize)]
 pub struct Fallback {
-    pub feature: &'static str,
-    pub option: &'static str,
+    pub feature: std::borrow::Cow<'static, str>,
+    pub option: std::borrow::Cow<'static, str>,
     pub asked: String,
     pub used: String,
 }
@@ -69,8 +69,8 @@ pub fn resolve(options: &Options, has: impl Fn(&str) -> bool) -> (Options, Vec<F
         if asked != to {
             o.set(option, to).expect("a valid fallback value");
             taken.push(Fallback {
-                feature,
-                option,
+                feature: feature.into(),
+                option: option.into(),
                 asked,
                 used: to.to_string(),
             });
@@ -193,7 +193,7 @@ mod tests {
         assert_eq!((all, none), (asked.clone(), vec![]));
         let options_of = |missing| {
             let (o, taken) = resolve(&asked, without(missing));
-            let keys: Vec<&str> = taken.iter().map(|t| t.option).collect();
+            let keys: Vec<String> = taken.iter().map(|t| t.option.to_string()).collect();
             (o, keys)
         };
         let (o, keys) = options_of("render_to_depth_texture");

@@ -37,8 +37,8 @@ pub fn resolve(options: &Options) -> (Options, Vec<Fallback>) {
         if asked != to {
             o.set(option, to).expect("a valid value");
             taken.push(Fallback {
-                feature: FEATURE,
-                option,
+                feature: FEATURE.into(),
+                option: option.into(),
                 asked,
                 used: to.to_string(),
             });
@@ -104,7 +104,7 @@ mod tests {
         assert_eq!(ff.shadow_map.omni, OmniMode::SixSpots);
         assert_eq!(ff.shadow_map.compare, Compare::Hardware);
         assert!(!ff.plan.omni_cube && !ff.plan.one_pass_stencil && !ff.plan.depth_clip);
-        let keys: Vec<&str> = taken.iter().map(|f| f.option).collect();
+        let keys: Vec<&str> = taken.iter().map(|f| f.option.as_ref()).collect();
         assert!(keys.contains(&"shadow_map.filter") && keys.contains(&"plan.depth_clip"));
         assert!(keys.contains(&"shadow_map.omni"));
         assert!(taken.iter().all(|f| f.feature == "fixed_function"));

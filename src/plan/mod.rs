@@ -203,7 +203,7 @@ impl LightPlan {
 }
 
 /// What the plan decided, for stats overlays and bench JSON.
-#[derive(Debug, Clone, Default, PartialEq, Serialize)]
+#[derive(Debug, Clone, Default, PartialEq, Serialize, serde::Deserialize)]
 pub struct PlanStats {
     /// The machine the decisions were weighed for (`plan.profile` resolved: `software` or
     /// `gpu`).

@@ -9,5 +9,6 @@ pub mod plot;
 pub mod progress;
 pub mod reproduce;
 pub mod shard;
+pub mod store;
 pub mod table;
 pub mod tune;

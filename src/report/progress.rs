@@ -63,7 +63,7 @@ fn peak_text() -> String {
 pub fn bar(units: usize, what: &str) -> ProgressBar {
     let b = ProgressBar::with_draw_target(Some(units as u64), draw_target());
     b.set_style(style(&format!(
-        "[{{elapsed_precise}}] {{bar:30}} {{pos}}/{{len}} {what}, {{eta}} left, {{peak}}  {{msg}}"
+        "[{{elapsed_precise}}] {{bar:30}} {{pos}}/{{len}} {what}, {{left}} left, {{peak}}  {{msg}}"
     )));
     b
 }
@@ -167,13 +167,30 @@ impl TermLike for LogLines {
     }
 }
 
-/// `template` with the `{peak}` key (the process's peak resident memory) added.
+/// `template` with the `{peak}` key (the process's peak resident memory) and the `{left}` key
+/// (time left at the run's average pace so far) added.
 pub fn style(template: &str) -> ProgressStyle {
     ProgressStyle::with_template(template)
         .unwrap_or_else(|_| ProgressStyle::default_bar())
         .with_key("peak", |_: &ProgressState, w: &mut dyn std::fmt::Write| {
             let _ = w.write_str(&peak_text());
         })
+        .with_key("left", |s: &ProgressState, w: &mut dyn std::fmt::Write| {
+            let _ = w.write_str(&left_text(s.elapsed(), s.pos(), s.len()));
+        })
+}
+
+/// Time left if the units left take as long as the units done did on average: `about 8m40s`,
+/// or `?` before the first unit is done. (indicatif's own `{eta}` follows the latest units'
+/// pace, which runs to years when one long unit follows many short ones.)
+pub fn left_text(elapsed: Duration, done: u64, units: Option<u64>) -> String {
+    match units {
+        Some(units) if done > 0 => {
+            let left = elapsed.mul_f64(units.saturating_sub(done) as f64 / done as f64);
+            format!("about {}", duration_text(left))
+        }
+        _ => "?".to_string(),
+    }
 }
 
 /// Plain progress lines for logs, one per unit started:
@@ -237,6 +254,21 @@ mod tests {
     use super::*;
 
     #[test]
+    fn time_left_follows_the_average_pace() {
+        let ten_min = Duration::from_secs(600);
+        assert_eq!(left_text(ten_min, 0, Some(4)), "?");
+        assert_eq!(left_text(ten_min, 1, None), "?");
+        assert_eq!(
+            left_text(ten_min, 2, Some(4)),
+            format!("about {}", duration_text(ten_min))
+        );
+        assert_eq!(
+            left_text(ten_min, 4, Some(4)),
+            format!("about {}", duration_text(Duration::ZERO))
+        );
+    }
+
+    #[test]
     fn reads_a_status_field() {
         let status = "Name:\tshadowlab\nVmPeak:\t 2000 kB\nVmHWM:\t  812340 kB\nVmRSS:\t 1000 kB\n";
         assert_eq!(status_field_kib(status, "VmHWM:"), Some(812_340));
@@ -284,7 +316,7 @@ mod tests {
         let b =
             ProgressBar::with_draw_target(Some(0), ProgressDrawTarget::term_like(Box::new(log)));
         b.set_style(style(
-            "{prefix}: [{elapsed_precise}] {bar:30} {pos}/{len}, {eta} left, {peak}  {msg}",
+            "{prefix}: [{elapsed_precise}] {bar:30} {pos}/{len}, {left} left, {peak}  {msg}",
         ));
         b.set_length(5);
         b.set_position(0);

@@ -6,7 +6,7 @@
 //! reference on the first frame, the sampled one along the path). Their Pareto frontier says, for
 //! each step of error, what it costs in time.
 
-use super::bench::{Bench, BenchConfig, BenchRow, BenchSettings};
+use super::bench::{Bench, BenchConfig, BenchRow, BenchSettings, Kept};
 use crate::options::{OptionError, Options, Technique};
 use crate::run::{RenderError, Renderer};
 use crate::scene::Scene;
@@ -417,6 +417,7 @@ fn measure_stage(
     configs: &[BenchConfig],
     stage: Stage,
     bar: &ProgressBar,
+    kept: &mut Kept,
 ) -> Result<(Vec<BenchRow>, Rung), RenderError> {
     let start = Instant::now();
     bar.set_length(configs.len() as u64);
@@ -434,7 +435,10 @@ fn measure_stage(
         sample_every: 1,
         memory_mb: settings.memory_mb,
     };
-    let rows = Bench::new(renderer, scene, bench).run_with(configs, bar)?;
+    let mut bench = Bench::new(renderer, scene, bench).with_kept(std::mem::take(kept));
+    let rows = bench.run_with(configs, bar);
+    *kept = bench.take_kept();
+    let rows = rows?;
     let rung = Rung {
         stage: stage.name,
         configurations: configs.len(),
@@ -452,6 +456,20 @@ pub fn tune(
     base: &Options,
     settings: &TuneSettings,
     bar: &ProgressBar,
+) -> Result<TuneResult, TuneError> {
+    tune_keeping(renderer, scene, base, settings, bar, &mut Kept::default())
+}
+
+/// [`tune`], reusing and adding to what `kept` holds (rows kept by content, and the exact
+/// masks and errors of the same scene's view): each candidate's error frame is drawn once,
+/// not once per rung, and a configuration kept before is not measured again.
+pub fn tune_keeping(
+    renderer: &mut Renderer,
+    scene: &Scene,
+    base: &Options,
+    settings: &TuneSettings,
+    bar: &ProgressBar,
+    kept: &mut Kept,
 ) -> Result<TuneResult, TuneError> {
     let mut base = base.clone();
     // The halving ranks by the exact error of the first frame; sampling the path is for the
@@ -472,7 +490,8 @@ pub fn tune(
             interleave: false,
             breakdown: false,
         };
-        let (rows, mut rung) = measure_stage(renderer, scene, settings, &configs, stage, bar)?;
+        let (rows, mut rung) =
+            measure_stage(renderer, scene, settings, &configs, stage, bar, kept)?;
         let points: Vec<(f64, f64)> = rows.iter().map(point).collect();
         let last = k + 1 == settings.rung_frames.len();
         let kept = survivors(&points, last, settings.finalists);
@@ -494,7 +513,7 @@ pub fn tune(
         interleave: true,
         breakdown: true,
     };
-    let (rows, rung) = measure_stage(renderer, scene, settings, &configs, stage, bar)?;
+    let (rows, rung) = measure_stage(renderer, scene, settings, &configs, stage, bar, kept)?;
     rungs.push(rung);
     let ranks = pareto_ranks(&rows.iter().map(point).collect::<Vec<_>>());
     let per_light = if settings.per_light {
@@ -508,7 +527,7 @@ pub fn tune(
             breakdown: true,
         };
         let (light_rows, mut rung) =
-            measure_stage(renderer, scene, settings, &configs, stage, bar)?;
+            measure_stage(renderer, scene, settings, &configs, stage, bar, kept)?;
         let choices = per_light_choices(&light_rows, settings.accuracy / 100.0);
         rung.kept = choices.len();
         rungs.push(rung);

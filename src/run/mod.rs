@@ -45,7 +45,7 @@ pub struct Held {
 }
 
 /// What [`Renderer::prepare`] readied.
-#[derive(Debug, Clone, Copy, Default, PartialEq, serde::Serialize)]
+#[derive(Debug, Clone, Copy, Default, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Prepared {
     /// Lights whose kept volumes were built ahead, their parts and vertices.
     pub lights: usize,

@@ -77,7 +77,7 @@ pub struct WorldVis {
 }
 
 /// What visibility culled this frame (for stats overlays and bench JSON).
-#[derive(Debug, Clone, Default, PartialEq, Serialize)]
+#[derive(Debug, Clone, Default, PartialEq, Serialize, serde::Deserialize)]
 pub struct VisStats {
     pub camera_leaf: Option<usize>,
     pub camera_cluster: i32,

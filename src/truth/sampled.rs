@@ -27,7 +27,7 @@ const TILE: u32 = 16;
 const Z95: f64 = 1.959_964;
 
 /// A share with its 95% interval.
-#[derive(Debug, Clone, Copy, Default, PartialEq, Serialize)]
+#[derive(Debug, Clone, Copy, Default, PartialEq, Serialize, serde::Deserialize)]
 pub struct Interval {
     /// The estimate, a fraction.
     pub value: f64,

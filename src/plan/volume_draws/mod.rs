@@ -59,7 +59,7 @@ pub enum VolumeDrawError {
 }
 
 /// What one light's volumes cost, for stats and reports.
-#[derive(Debug, Clone, Copy, Default, PartialEq, Serialize)]
+#[derive(Debug, Clone, Copy, Default, PartialEq, Serialize, serde::Deserialize)]
 pub struct VolumeStats {
     pub light: usize,
     /// Side quads drawn.

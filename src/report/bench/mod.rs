@@ -9,25 +9,30 @@
 //! (`truth::sampled`, `estimate.samples` pixels per light), in an untimed pass after the timing.
 
 use crate::frame::{CacheStats, Frame, Syncs};
-use crate::images::Mask;
 use crate::options::{OptionError, Options, Technique};
 use crate::plan::PlanStats;
 use crate::plan::fallback::Fallback;
 use crate::plan::volume_draws::VolumeStats;
 use crate::presets::{Difference, Preset};
-use crate::report::estimate::{gbuffer_of, render_sampled};
+use crate::report::store::RowStore;
 use crate::run::{FrameRequest, Prepared, RenderError, Renderer};
 use crate::scene::Scene;
 use crate::scene::path::PathKey;
 use crate::truth::sampled::{FrameSample, Interval};
-use crate::truth::{Counts, ExactMasks, Reference};
+use crate::truth::{Counts, Reference};
 use indicatif::ProgressBar;
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 use std::collections::{BTreeMap, HashMap};
 use std::time::Instant;
 
+mod error;
 mod interleave;
+mod kept;
 mod stats;
+
+use error::FrameError;
+pub use error::{Capture, View};
+pub use kept::Kept;
 
 pub use stats::{Median, MsStats};
 use stats::{frame_ratios, median, stats};
@@ -141,7 +146,7 @@ pub fn sweep_configs(
 }
 
 /// Error against the exact reference, as fractions of receiver pixels.
-#[derive(Debug, Clone, Copy, Default, PartialEq, Serialize)]
+#[derive(Debug, Clone, Copy, Default, PartialEq, Serialize, Deserialize)]
 pub struct ErrorRow {
     pub receiver_pixels: usize,
     pub false_shadow: f64,
@@ -166,7 +171,7 @@ impl From<&Counts> for ErrorRow {
 }
 
 /// One configuration's results (a row of the JSON array).
-#[derive(Debug, Clone, Serialize)]
+#[derive(Debug, Clone, Serialize, Deserialize)]
 pub struct BenchRow {
     pub scene: String,
     pub technique: String,
@@ -236,7 +241,7 @@ pub struct BenchRow {
 }
 
 /// One frame of the path against the sampled reference.
-#[derive(Debug, Clone, Serialize)]
+#[derive(Debug, Clone, Serialize, Deserialize)]
 pub struct SampledFrame {
     /// Index into the path.
     pub frame: usize,
@@ -247,7 +252,7 @@ pub struct SampledFrame {
 }
 
 /// The sampled reference along the path, and what it cost.
-#[derive(Debug, Clone, Serialize)]
+#[derive(Debug, Clone, Serialize, Deserialize)]
 pub struct SampledPath {
     /// Pixels traced per light and frame.
     pub samples_per_light: u32,
@@ -308,27 +313,6 @@ pub fn pass_totals(frame: &Frame) -> BTreeMap<String, f64> {
     out
 }
 
-/// One configuration's error on the path's first frame: all lights, per light, and the volume
-/// work of that frame.
-struct FrameError {
-    total: Counts,
-    per_light: Vec<(usize, Counts)>,
-    volumes: Vec<VolumeStats>,
-    plan: PlanStats,
-    cache: CacheStats,
-    fallbacks: Vec<Fallback>,
-}
-
-/// The path's first frame of one configuration, with its masks, the exact masks and the error.
-#[derive(Debug, Clone)]
-pub struct Capture {
-    pub frame: Frame,
-    /// The exact mask of each of `frame.masks`, in the same order.
-    pub exact: Vec<Mask>,
-    pub total: Counts,
-    pub per_light: Vec<(usize, Counts)>,
-}
-
 #[derive(Clone)]
 struct Measured {
     /// Latency: from the call to the frame's completion.
@@ -349,7 +333,7 @@ struct Measured {
 }
 
 /// Where the timed frames waited for the GPU ([`Syncs`]), per frame on average.
-#[derive(Debug, Clone, Copy, Default, PartialEq, Serialize)]
+#[derive(Debug, Clone, Copy, Default, PartialEq, Serialize, Deserialize)]
 pub struct SyncsPerFrame {
     /// Every kind below together.
     pub total: f64,
@@ -379,7 +363,7 @@ impl SyncsPerFrame {
 /// What the measured frames redid and what they took from earlier frames, per frame on
 /// average: along a moving path, what motion costs the caches (a still scene redoes nothing
 /// after its first frame).
-#[derive(Debug, Clone, Copy, Default, PartialEq, Serialize)]
+#[derive(Debug, Clone, Copy, Default, PartialEq, Serialize, Deserialize)]
 pub struct Redone {
     pub frames: usize,
     /// Shadow maps drawn (a light, its view or a caster in it moved) and reused.
@@ -582,12 +566,16 @@ pub struct Bench<'a> {
     /// The scene, posed at the frame being drawn (a copy: posing writes into it).
     scene: Scene,
     settings: BenchSettings,
-    /// Exact masks of the path's first view, by frame size and light.
-    exact: ExactMasks,
+    /// Exact masks and errors of the path's first view.
+    view: View,
     /// Shadows-off frame times by path frame, measured once per distinct options.
     baselines: HashMap<String, Vec<f64>>,
     /// The reference of a moving scene's current pose, by its models' poses and transforms.
     posed_reference: Option<(ModelsKey, Reference)>,
+    /// Rows measured before, by content: a configuration found here is not measured again.
+    store: RowStore,
+    /// The scene's content as the store's keys name it (empty for a store of this bench only).
+    fingerprint: String,
 }
 
 /// Where every model stands (its transform's bits) and in which pose.
@@ -609,9 +597,11 @@ impl<'a> Bench<'a> {
             renderer,
             scene: scene.clone(),
             settings,
-            exact: ExactMasks::new(),
+            view: View::default(),
             baselines: HashMap::new(),
             posed_reference: None,
+            store: RowStore::in_memory(),
+            fingerprint: String::new(),
         }
     }
 
@@ -707,86 +697,6 @@ impl<'a> Bench<'a> {
         }
     }
 
-    /// The first frame of the path with `options`, compared with the exact reference.
-    pub fn capture(&mut self, options: &Options) -> Result<Capture, RenderError> {
-        // The exact masks kept are those of the first frame, posed at its time.
-        self.settings.pose(&mut self.scene, 0);
-        let camera = self.settings.camera(&self.scene, 0);
-        let frame = self.renderer.render_at(
-            &self.scene,
-            &camera,
-            options,
-            FrameRequest {
-                masks: true,
-                ..FrameRequest::default()
-            },
-        )?;
-        let m = self
-            .exact
-            .measure(&self.scene, gbuffer_of(&frame)?, &frame.masks);
-        Ok(Capture {
-            frame,
-            exact: m.exact,
-            total: m.total,
-            per_light: m.per_light,
-        })
-    }
-
-    /// Every measured frame of the path with `options`, its masks drawn (untimed) and sampled:
-    /// the error along the path and, per frame, milliseconds of masks and of tracing.
-    fn sample_path(
-        &mut self,
-        options: &Options,
-    ) -> Result<Vec<(usize, FrameSample, f64, f64)>, RenderError> {
-        let mut out = Vec::with_capacity(self.settings.frames);
-        let moving = self.settings.motion && !self.scene.motion.is_still();
-        for i in (0..self.settings.frames.max(1)).step_by(self.settings.sample_every.max(1)) {
-            self.settings.pose(&mut self.scene, i);
-            let camera = self.settings.camera(&self.scene, i);
-            // A moving scene's casters are where this frame put them: a reference of its
-            // own, built again when a model moved (untimed, like the rest of the sampling).
-            let reference = if moving {
-                let key = models_key(&self.scene);
-                let stale = self.posed_reference.as_ref().is_none_or(|(k, _)| *k != key);
-                if stale {
-                    self.posed_reference = Some((key, Reference::build(&self.scene)));
-                }
-                match &self.posed_reference {
-                    Some((_, r)) => r,
-                    None => self.exact.reference(&self.scene),
-                }
-            } else {
-                self.exact.reference(&self.scene)
-            };
-            let s = render_sampled(
-                self.renderer,
-                &self.scene,
-                &camera,
-                options,
-                reference,
-                (i as u64, true),
-            )?;
-            out.push((i, s.sample, s.masks_ms, s.trace_ms));
-        }
-        Ok(out)
-    }
-
-    /// Error of `options` on the first frame of the path, with that frame's volume stats.
-    fn error(&mut self, options: &Options) -> Result<FrameError, RenderError> {
-        // Frusta kept from the path's last frames are sized for another view: the first frame's
-        // error is the configuration's own, not its history's.
-        self.renderer.forget_kept_frusta();
-        let c = self.capture(options)?;
-        Ok(FrameError {
-            total: c.total,
-            per_light: c.per_light,
-            volumes: c.frame.volumes,
-            plan: c.frame.plan_stats,
-            cache: c.frame.cache,
-            fallbacks: c.frame.fallbacks,
-        })
-    }
-
     /// Measures every configuration, with a progress bar when the settings ask for one.
     pub fn run(&mut self, configs: &[BenchConfig]) -> Result<Vec<BenchRow>, RenderError> {
         let bar = if self.settings.progress {
@@ -799,8 +709,45 @@ impl<'a> Bench<'a> {
         Ok(rows)
     }
 
-    /// Measures every configuration, advancing the caller's bar by one per configuration.
+    /// Measures every configuration the store does not hold, advancing the caller's bar by one
+    /// per configuration; the rows come back in the configurations' order.
     pub fn run_with(
+        &mut self,
+        configs: &[BenchConfig],
+        bar: &ProgressBar,
+    ) -> Result<Vec<BenchRow>, RenderError> {
+        let keys: Vec<String> = configs.iter().map(|c| self.row_key(c)).collect();
+        let mut kept: Vec<Option<BenchRow>> = keys.iter().map(|k| self.store.get(k)).collect();
+        let todo: Vec<BenchConfig> = configs
+            .iter()
+            .zip(&kept)
+            .filter(|(_, row)| row.is_none())
+            .map(|(c, _)| c.clone())
+            .collect();
+        bar.inc((configs.len() - todo.len()) as u64);
+        let mut measured = self.measure_rows(&todo, bar)?.into_iter();
+        let mut rows = Vec::with_capacity(configs.len());
+        for ((c, key), row) in configs.iter().zip(&keys).zip(&mut kept) {
+            let row = match row.take() {
+                // Kept under another name (the same options in another section or sweep).
+                Some(row) => BenchRow {
+                    label: c.label(),
+                    swept: c.swept.clone(),
+                    ..row
+                },
+                None => {
+                    let row = measured.next().expect("a row per configuration measured");
+                    self.store.put(key, &row);
+                    row
+                }
+            };
+            rows.push(row);
+        }
+        Ok(rows)
+    }
+
+    /// Measures every configuration given, advancing the bar by one per configuration.
+    fn measure_rows(
         &mut self,
         configs: &[BenchConfig],
         bar: &ProgressBar,
@@ -817,27 +764,38 @@ impl<'a> Bench<'a> {
             let off_ms = median(&mut off.clone());
             let ratios = stats(&frame_ratios(&m.frame_ms, &off));
             let cpu_ms = stats(&m.submit_ms);
-            let FrameError {
-                total,
-                per_light,
-                volumes,
-                plan,
-                cache,
-                fallbacks,
-            } = self.error(&c.options)?;
+            let sample = c.options.technique != Technique::None && c.options.estimate.samples > 0;
+            // On a still path every measured frame is the error frame again: its masks,
+            // sampled once, stand for all of them.
+            let still = sample && self.path_is_still();
+            let (
+                FrameError {
+                    total,
+                    per_light,
+                    volumes,
+                    plan,
+                    cache,
+                    fallbacks,
+                },
+                first_sample,
+            ) = self.error(&c.options, still)?;
             let frame_ms = stats(&m.frame_ms);
-            let sampled =
-                if c.options.technique != Technique::None && c.options.estimate.samples > 0 {
-                    bar.set_message(format!("{}: sampled reference along the path", c.label()));
-                    let frames = self.sample_path(&c.options)?;
-                    Some(SampledPath::new(
-                        c.options.estimate.samples,
-                        frames,
-                        frame_ms.median,
-                    ))
-                } else {
-                    None
+            let sampled = if sample {
+                let frames = match first_sample {
+                    Some(first) => vec![first],
+                    None => {
+                        bar.set_message(format!("{}: sampled reference along the path", c.label()));
+                        self.sample_path(&c.options)?
+                    }
                 };
+                Some(SampledPath::new(
+                    c.options.estimate.samples,
+                    frames,
+                    frame_ms.median,
+                ))
+            } else {
+                None
+            };
             rows.push(BenchRow {
                 scene: self.scene.name.clone(),
                 technique: c.options.technique.to_string(),

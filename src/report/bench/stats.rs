@@ -4,7 +4,7 @@
 use serde::Serialize;
 
 /// Frame times of the measured frames: median, spread and the tail a person sees as stutter.
-#[derive(Debug, Clone, Copy, Default, PartialEq, Serialize)]
+#[derive(Debug, Clone, Copy, Default, PartialEq, Serialize, serde::Deserialize)]
 pub struct MsStats {
     pub median: f64,
     pub min: f64,
@@ -35,7 +35,7 @@ fn percentile(sorted: &[f64], q: f64) -> f64 {
     sorted[rank.clamp(1, sorted.len()) - 1]
 }
 
-#[derive(Debug, Clone, Copy, Default, PartialEq, Serialize)]
+#[derive(Debug, Clone, Copy, Default, PartialEq, Serialize, serde::Deserialize)]
 pub struct Median {
     pub median: f64,
 }

@@ -124,28 +124,32 @@ pub fn run(lab: &mut Lab) -> Result<Vec<Section>, ReproduceError> {
     } else {
         &[2, 4, 6, 8, 10]
     };
-    let sm = claim(
-        lab,
-        "claim-sm-lights",
-        "Paper: shadow maps with 2 to 10 lights",
-        "\"With 2 to 10 lights in a scene\" the paper's shadow maps run at around 30 fps and \
+    let sm = super::timed(lab, |lab| {
+        claim(
+            lab,
+            "claim-sm-lights",
+            "Paper: shadow maps with 2 to 10 lights",
+            "\"With 2 to 10 lights in a scene\" the paper's shadow maps run at around 30 fps and \
          sometimes above 100 fps, against 120-250 fps typical for its renderer: roughly 1.2x to \
          8x the frame time, if those rates are taken as shadows off. It names the area of the \
          screen a light reaches as the dominant cost.",
-        "shadow_map",
-        sm_counts,
-        &order,
-    )?;
-    let sv = claim(
-        lab,
-        "claim-sv-lights",
-        "Paper: shadow volumes with 3 to 4 lights",
-        "With around 3-4 lights visible, the paper's shadow volumes run at 30-40 fps (about 20 \
+            "shadow_map",
+            sm_counts,
+            &order,
+        )
+    })?;
+    let sv = super::timed(lab, |lab| {
+        claim(
+            lab,
+            "claim-sv-lights",
+            "Paper: shadow volumes with 3 to 4 lights",
+            "With around 3-4 lights visible, the paper's shadow volumes run at 30-40 fps (about 20 \
          fps with more lights potentially visible), against 120-250 fps typical: roughly 3x to \
          8x the frame time. The two stencil passes per light dominate.",
-        "shadow_volume",
-        &[3, 4],
-        &order,
-    )?;
+            "shadow_volume",
+            &[3, 4],
+            &order,
+        )
+    })?;
     Ok(vec![sm, sv])
 }

@@ -86,16 +86,16 @@ fn measure_with_images(
 }
 
 pub fn run(lab: &mut Lab) -> Result<Vec<Section>, ReproduceError> {
-    let sections = vec![
-        fig1_clip_planes(lab)?,
-        fig2_map_size(lab)?,
-        fig10_bias(lab)?,
-        fig12_pcf(lab)?,
-        fig13_14_stages(lab)?,
-        fig20_21_zpass_zfail(lab)?,
-        fig22_two_sided(lab)?,
+    let figures: [super::SectionFn; SECTIONS] = [
+        fig1_clip_planes,
+        fig2_map_size,
+        fig10_bias,
+        fig12_pcf,
+        fig13_14_stages,
+        fig20_21_zpass_zfail,
+        fig22_two_sided,
     ];
-    Ok(sections)
+    figures.into_iter().map(|f| super::timed(lab, f)).collect()
 }
 
 fn done(lab: &Lab, s: Section) -> Section {

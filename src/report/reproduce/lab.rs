@@ -4,7 +4,7 @@
 use super::{ReproduceError, Settings};
 use crate::images::Rgba;
 use crate::options::Options;
-use crate::report::bench::{Bench, BenchConfig, BenchRow, BenchSettings, Capture};
+use crate::report::bench::{Bench, BenchConfig, BenchRow, BenchSettings, Capture, Kept};
 use crate::run::Renderer;
 use crate::scene::Scene;
 use crate::scene::path::PathKey;
@@ -25,6 +25,8 @@ pub struct Lab<'a> {
     /// frame.
     fixed: Vec<&'static str>,
     pub quick: bool,
+    /// Measured frames per configuration (`Settings::frames`).
+    pub frames: usize,
     out: &'a Path,
     bar: &'a ProgressBar,
     rows: Vec<BenchRow>,
@@ -65,6 +67,7 @@ impl<'a> Lab<'a> {
             base,
             fixed: super::PAPER_FRAME.to_vec(),
             quick: settings.quick,
+            frames: settings.frames,
             out,
             bar,
             rows: Vec::new(),
@@ -82,6 +85,16 @@ impl<'a> Lab<'a> {
         &self.rows
     }
 
+    /// The rows kept and the exact masks and errors of the lab's view, taken to measure more
+    /// of the scene elsewhere (`tune`); [`Lab::put_kept`] gives them back.
+    pub fn take_kept(&mut self) -> Kept {
+        self.bench.take_kept()
+    }
+
+    pub fn put_kept(&mut self, kept: Kept) {
+        self.bench.put_kept(kept);
+    }
+
     /// The renderer the lab measures on.
     pub fn renderer(&mut self) -> &mut Renderer {
         self.bench.renderer()
@@ -96,9 +109,16 @@ impl<'a> Lab<'a> {
         self.out.join(file)
     }
 
-    /// Every row this lab measured.
-    pub fn into_rows(self) -> Vec<BenchRow> {
-        self.rows
+    /// Measures with what an earlier lab kept (its view only if of the same scene).
+    pub fn with_kept(mut self, kept: Kept) -> Lab<'a> {
+        self.bench.put_kept(kept);
+        self
+    }
+
+    /// Every row this lab measured, and what it kept (for the next lab).
+    pub fn into_parts(mut self) -> (Vec<BenchRow>, Kept) {
+        let kept = self.bench.take_kept();
+        (self.rows, kept)
     }
 
     /// The scene's options with `KEY=VALUE` assignments applied.

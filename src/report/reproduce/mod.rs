@@ -26,12 +26,15 @@ const PAPER_FRAME: &[&str] = &["plan.enabled=false"];
 use super::bench::BenchRow;
 use super::table::Table;
 use crate::options::{OptionError, Options};
+use crate::report::bench::{Kept, View};
+use crate::report::store::RowStore;
 use crate::run::{RenderError, Renderer};
 use crate::scene::Scene;
 use crate::scene_file::SceneFileError;
 use crate::scene_file::load::{LoadError, Loaded, load_file};
 use indicatif::ProgressBar;
 use std::collections::BTreeMap;
+use std::collections::HashMap;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
@@ -75,6 +78,10 @@ pub struct Settings {
     /// `KEY=VALUE` settings applied to every configuration (after each scene's `[options]`).
     pub sets: Vec<String>,
     pub progress: bool,
+    /// Where measured rows are kept by content (code, GL, scene, options, frame settings), so
+    /// that a run interrupted or run again measures only what it lacks; None keeps them for
+    /// this run only (a configuration met twice is still measured once).
+    pub keep: Option<PathBuf>,
 }
 
 impl Settings {
@@ -89,6 +96,7 @@ impl Settings {
             frames: 3,
             sets: Vec::new(),
             progress: true,
+            keep: None,
         }
     }
 
@@ -143,6 +151,9 @@ pub struct Section {
     pub regenerate: Vec<String>,
     /// The key numbers, by name (for the summary and for tests).
     pub numbers: BTreeMap<String, f64>,
+    /// Seconds this run spent measuring the section (a claim's scenes added together; the
+    /// first section on a scene also pays for its exact reference).
+    pub seconds: f64,
 }
 
 impl Section {
@@ -171,7 +182,11 @@ pub struct Report {
     pub sections: Vec<Section>,
     /// Every measured configuration.
     pub rows: Vec<BenchRow>,
+    /// How many configurations were measured, and how many taken from rows kept before.
+    pub reuse: String,
     pub elapsed_s: f64,
+    /// Seconds spent loading scenes and uploading them (outside every section).
+    pub loading_s: f64,
 }
 
 impl Report {
@@ -212,6 +227,24 @@ fn load_scene(
     Ok((scene, options, warnings))
 }
 
+/// Loads a benchmark scene and uploads it to the renderer, adding the time to the report's
+/// `loading_s`.
+fn upload(
+    renderer: &mut Renderer,
+    settings: &Settings,
+    name: &str,
+    report: &mut Report,
+) -> Result<(Scene, Options, Vec<String>), ReproduceError> {
+    let start = Instant::now();
+    let loaded = load_scene(settings, name)?;
+    renderer.load_scene(&loaded.0)?;
+    report.loading_s += start.elapsed().as_secs_f64();
+    Ok(loaded)
+}
+
+/// A section measured on one lab.
+type SectionFn = fn(&mut Lab) -> Result<Section, ReproduceError>;
+
 /// The order sections appear in, whatever order they were measured in.
 const ORDER: &[&str] = &[
     "paper-fig1",
@@ -239,7 +272,7 @@ fn progress_bar(settings: &Settings, units: usize) -> ProgressBar {
     let b =
         ProgressBar::with_draw_target(Some(units as u64), crate::report::progress::draw_target());
     b.set_style(crate::report::progress::style(
-        "reproduce [{elapsed_precise}] {bar:30} {pos}/{len} sections, {eta} left, {peak}  {msg}",
+        "reproduce [{elapsed_precise}] {bar:30} {pos}/{len} sections, {left} left, {peak}  {msg}",
     ));
     b
 }
@@ -287,6 +320,17 @@ fn merged_in_order(sections: Vec<Section>) -> Vec<Section> {
     merged
 }
 
+/// Runs one section, recording how long it took.
+fn timed<'a>(
+    lab: &mut Lab<'a>,
+    section: impl FnOnce(&mut Lab<'a>) -> Result<Section, ReproduceError>,
+) -> Result<Section, ReproduceError> {
+    let start = Instant::now();
+    let mut s = section(lab)?;
+    s.seconds = start.elapsed().as_secs_f64();
+    Ok(s)
+}
+
 /// Runs every section and writes `out/index.html`, `out/index.md`, `out/results.json` and the
 /// images.
 pub fn run(
@@ -309,29 +353,42 @@ pub fn run(
         ..Report::default()
     };
     let mut sections: Vec<Section> = Vec::new();
+    let mut store = match &settings.keep {
+        Some(dir) => RowStore::on_disk(dir).map_err(|source| ReproduceError::Io {
+            path: dir.clone(),
+            source,
+        })?,
+        None => RowStore::in_memory(),
+    };
+    // Exact masks and errors by scene, for the next lab of the same scene.
+    let mut views: HashMap<String, View> = HashMap::new();
 
     // The figures and the claims on the scenes they name.
     for name in ["oa_dm1", "q3dm6ish"] {
         if settings.quick && name != "oa_dm1" {
             continue;
         }
-        let (scene, options, warnings) = load_scene(settings, name)?;
+        let (scene, options, warnings) = upload(renderer, settings, name, &mut report)?;
         report
             .environment
             .extend(warnings.iter().map(|w| format!("{name}: {w}")));
-        renderer.load_scene(&scene)?;
-        let mut lab = Lab::new(renderer, &scene, name, options, settings, out, &bar);
+        let view = views.remove(name).unwrap_or_default();
+        let mut lab = Lab::new(renderer, &scene, name, options, settings, out, &bar)
+            .with_kept(Kept { store, view });
         if name == "oa_dm1" {
             sections.extend(figures::run(&mut lab)?);
-            sections.push(thesis::chapter5(&mut lab)?);
+            sections.push(timed(&mut lab, thesis::chapter5)?);
             bar.inc(1);
             for section in [forsyth::ids, forsyth::shootout, forsyth::subdivision] {
-                sections.push(section(&mut lab)?);
+                sections.push(timed(&mut lab, section)?);
                 bar.inc(1);
             }
         }
         sections.extend(claims::run(&mut lab)?);
-        report.rows.extend(lab.into_rows());
+        let (rows, kept) = lab.into_parts();
+        store = kept.store;
+        views.insert(name.to_string(), kept.view);
+        report.rows.extend(rows);
     }
     if settings.quick {
         // q3dm6ish's claims were skipped: count them as done.
@@ -342,42 +399,50 @@ pub fn run(
     // shadow stripes are finer than a pixel; perspective shadow maps on the hard
     // case made for them.
     for (case, section) in [
-        (
-            "grazing",
-            forsyth::buffers as fn(&mut Lab) -> Result<Section, ReproduceError>,
-        ),
+        ("grazing", forsyth::buffers as SectionFn),
         ("duelling_omni", forsyth::frusta),
         ("minified_grate", forsyth::priority_mips),
         ("near_receiver", thesis::chapter4),
     ] {
-        let (scene, options, _) = load_scene(settings, &format!("../hard/{case}"))?;
-        renderer.load_scene(&scene)?;
+        let (scene, options, _) =
+            upload(renderer, settings, &format!("../hard/{case}"), &mut report)?;
         let mut lab = Lab::new(renderer, &scene, case, options, settings, out, &bar)
+            .with_kept(Kept {
+                store,
+                view: View::default(),
+            })
             .with_scene_file(&format!("assets/hard/{case}.toml"));
-        sections.push(section(&mut lab)?);
-        report.rows.extend(lab.into_rows());
+        sections.push(timed(&mut lab, section)?);
+        let (rows, kept) = lab.into_parts();
+        store = kept.store;
+        report.rows.extend(rows);
         bar.inc(1);
     }
 
     // Accuracy against time on every scene.
     let mut sweeps = Vec::new();
     for name in sweep_scenes {
-        let (scene, options, warnings) = load_scene(settings, name)?;
+        let (scene, options, warnings) = upload(renderer, settings, name, &mut report)?;
         if !settings.quick || *name != "oa_dm1" {
             report
                 .environment
                 .extend(warnings.iter().map(|w| format!("{name}: {w}")));
         }
-        renderer.load_scene(&scene)?;
-        let mut lab = Lab::new(renderer, &scene, name, options, settings, out, &bar);
-        sweeps.push(pareto::run(&mut lab)?);
-        sweeps.push(thesis::comparison(&lab, lab.rows())?);
-        sweeps.push(pareto::frontier(&mut lab)?);
-        report.rows.extend(lab.into_rows());
+        let view = views.remove(*name).unwrap_or_default();
+        let mut lab = Lab::new(renderer, &scene, name, options, settings, out, &bar)
+            .with_kept(Kept { store, view });
+        sweeps.push(timed(&mut lab, pareto::run)?);
+        sweeps.push(timed(&mut lab, |lab| thesis::comparison(lab, lab.rows()))?);
+        sweeps.push(timed(&mut lab, pareto::frontier)?);
+        let (rows, kept) = lab.into_parts();
+        store = kept.store;
+        views.insert(name.to_string(), kept.view);
+        report.rows.extend(rows);
         bar.inc(1);
     }
     report.environment.sort();
     report.environment.dedup();
+    report.reuse = store.summary();
 
     let mut merged = merged_in_order(sections);
     report.summary = summary(&merged, &sweeps);
@@ -397,6 +462,7 @@ impl Section {
         self.tables.extend(other.tables);
         self.regenerate.extend(other.regenerate);
         self.numbers.extend(other.numbers);
+        self.seconds += other.seconds;
     }
 }
 

@@ -1,7 +1,7 @@
 //! Writes a report as `index.html`, its Markdown copy `index.md`, and `results.json`.
 
 use super::{Report, ReproduceError, Section};
-use crate::report::table::escape_html;
+use crate::report::table::{Align, Table, escape_html};
 use std::path::Path;
 
 const TITLE: &str = "shadowlab: the paper's figures and claims, reproduced";
@@ -101,6 +101,42 @@ fn section_markdown(s: &Section) -> String {
     m
 }
 
+/// Where the run's time went: each section's seconds, loading, and what is left (plots,
+/// pages, work between sections), slowest first.
+pub fn time_table(report: &Report) -> Table {
+    let mut t = Table::new(&[
+        ("section", Align::Left),
+        ("seconds", Align::Right),
+        ("share", Align::Right),
+    ]);
+    let mut rows: Vec<(String, f64)> = report
+        .sections
+        .iter()
+        .map(|s| (s.id.clone(), s.seconds))
+        .collect();
+    rows.push(("loading and uploading scenes".into(), report.loading_s));
+    let counted: f64 = rows.iter().map(|(_, s)| s).sum();
+    rows.push((
+        "the rest (orders, plots, pages)".into(),
+        (report.elapsed_s - counted).max(0.0),
+    ));
+    rows.sort_by(|a, b| b.1.total_cmp(&a.1));
+    let total = report.elapsed_s.max(f64::MIN_POSITIVE);
+    for (name, seconds) in rows {
+        t.push(vec![
+            name,
+            format!("{seconds:.1}"),
+            format!("{:.1}%", 100.0 * seconds / total),
+        ]);
+    }
+    t.push(vec![
+        "whole run".into(),
+        format!("{:.1}", report.elapsed_s),
+        "100%".into(),
+    ]);
+    t
+}
+
 pub fn write(report: &Report, out: &Path) -> Result<(), ReproduceError> {
     let minutes = report.elapsed_s / 60.0;
     let how = format!(
@@ -142,6 +178,16 @@ pub fn write(report: &Report, out: &Path) -> Result<(), ReproduceError> {
         html.push_str(&section_html(s));
         md.push_str(&section_markdown(s));
     }
+    let time = time_table(report);
+    let reuse = format!(
+        "{}; a configuration taken from rows kept before costs no time here.",
+        report.reuse
+    );
+    html.push_str("<h2 id=\"time\">Where the time went</h2>\n");
+    html.push_str(&format!("<p>{}</p>\n", escape_html(&reuse)));
+    html.push_str(&time.to_html());
+    md.push_str(&format!("## Where the time went\n\n{reuse}\n\n"));
+    md.push_str(&time.to_markdown());
     html.push_str("</body></html>\n");
     write_file(&out.join("index.html"), &html)?;
     write_file(&out.join("index.md"), &md)?;

@@ -8,7 +8,7 @@ use crate::options::Options;
 use crate::report::bench::{BenchConfig, BenchRow};
 use crate::report::plot;
 use crate::report::table::{Align, Table, bench_table};
-use crate::report::tune::{TuneSettings, tune};
+use crate::report::tune::{TuneSettings, tune_keeping};
 use crate::scene::path::PathKey;
 
 /// The configurations: the paper's choices first, then the toggles that matter most.
@@ -213,14 +213,18 @@ pub fn frontier(lab: &mut Lab) -> Result<Section, ReproduceError> {
     let mut settings = TuneSettings::new(candidates, vec![PathKey::of(&scene.camera)]);
     settings.finalists = finalists;
     settings.per_light = false;
+    // The finalists as many frames as every other configuration of the report.
+    settings.final_frames = lab.frames;
     if lab.quick {
         settings.rung_frames = vec![1];
-        settings.final_frames = 1;
     }
     lab.bar()
         .set_message(format!("{name}: tune, {candidates} configurations"));
     let hidden = indicatif::ProgressBar::hidden();
-    let result = tune(lab.renderer(), scene, &base, &settings, &hidden)?;
+    let mut kept = lab.take_kept();
+    let result = tune_keeping(lab.renderer(), scene, &base, &settings, &hidden, &mut kept);
+    lab.put_kept(kept);
+    let result = result?;
     let file = format!("frontier-{name}.png");
     plot::error_vs_time_marked(
         &result.rows,
@@ -259,7 +263,9 @@ pub fn frontier(lab: &mut Lab) -> Result<Section, ReproduceError> {
     }
     s.tables.push(t);
     s.regenerate.push(format!(
-        "shadowlab tune --scene assets/scenes/{name}.toml --candidates {candidates} --finalists {finalists}"
+        "shadowlab tune --scene assets/scenes/{name}.toml --candidates {candidates} --finalists \
+         {finalists} --final-frames {} --no-per-light",
+        settings.final_frames
     ));
     Ok(s)
 }
