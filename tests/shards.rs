@@ -56,20 +56,15 @@ fn check_split_two_ways_and_merged_equals_one_run() {
     std::fs::create_dir_all(&dir).unwrap();
     let single = lines(&check(&data, &[]).output().unwrap());
     let part = |k: usize| dir.join(format!("part{k}"));
-    let shards: Vec<_> = (1..=2)
-        .map(|k| {
-            let shard = format!("{k}/2");
-            let out = part(k);
-            check(&data, &["--shard", &shard, "--out", out.to_str().unwrap()])
-                .stdout(std::process::Stdio::null())
-                .stderr(std::process::Stdio::null())
-                .spawn()
-                .unwrap()
-        })
-        .collect();
-    for mut s in shards {
-        assert!(s.wait().unwrap().success());
-    }
+    both_shards_at_once(|k| {
+        let out = part(k);
+        let mut c = check(
+            &data,
+            &["--shard", &format!("{k}/2"), "--out", out.to_str().unwrap()],
+        );
+        c.stdout(std::process::Stdio::null());
+        c
+    });
     // In any order.
     let merged = lines(
         &shadowlab()
@@ -106,6 +101,22 @@ fn check_split_two_ways_and_merged_equals_one_run() {
         assert!(out.contains(says), "{out}");
     }
     std::fs::remove_dir_all(&dir).ok();
+}
+
+/// Shards 1/2 and 2/2 as two processes at once (`shard(k)` makes shard k's command), both
+/// succeeding.
+fn both_shards_at_once(shard: impl Fn(usize) -> Command) {
+    let running: Vec<_> = (1..=2)
+        .map(|k| {
+            shard(k)
+                .stderr(std::process::Stdio::null())
+                .spawn()
+                .unwrap()
+        })
+        .collect();
+    for mut s in running {
+        assert!(s.wait().unwrap().success());
+    }
 }
 
 /// `merge`'s error for `parts`, which must fail.
@@ -167,17 +178,7 @@ fn a_bench_sweep_split_two_ways_and_merged_equals_one_run() {
         "{single:?}"
     );
     let part = |k: usize| dir.join(format!("part{k}"));
-    let shards: Vec<_> = (1..=2)
-        .map(|k| {
-            bench(&part(k), "128,512", &["--shard", &format!("{k}/2")])
-                .stderr(std::process::Stdio::null())
-                .spawn()
-                .unwrap()
-        })
-        .collect();
-    for mut s in shards {
-        assert!(s.wait().unwrap().success());
-    }
+    both_shards_at_once(|k| bench(&part(k), "128,512", &["--shard", &format!("{k}/2")]));
     assert_eq!(
         (bench_errors(&part(1)).len(), bench_errors(&part(2)).len()),
         (2, 2)

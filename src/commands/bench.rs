@@ -22,7 +22,8 @@ pub struct Args {
     warmup: usize,
     /// Measured frames per configuration (default: 10, or one lap of --path). Each is also
     /// sampled against the exact reference afterwards, untimed (`estimate.samples` pixels per
-    /// light; `--set estimate.samples=0` skips it).
+    /// light; `--set estimate.samples=0` skips it); on a still camera with the scene standing
+    /// the frames are all the first, whose masks are sampled once.
     #[arg(long)]
     frames: Option<usize>,
     /// Camera path: `turn` (360° in place over 128 frames, DarkPlaces' timerefresh), `still`
@@ -151,6 +152,7 @@ pub fn run(common: &CommonArgs, args: &Args) -> Result<()> {
         progress: true,
         interleave: !args.sequential,
         breakdown: true,
+        pipelined: true,
         motion: !args.no_motion,
         sample_every: args.sample_every.unwrap_or(if recorded { 4 } else { 1 }),
         memory_mb: args.memory_mb,

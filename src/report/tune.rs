@@ -430,6 +430,8 @@ fn measure_stage(
         progress: false,
         interleave: stage.interleave,
         breakdown: stage.breakdown,
+        // Throughput ranks nothing: the rows that report it are the final round's.
+        pipelined: stage.breakdown,
         // The scene as loaded: tune compares techniques, the path moves the camera.
         motion: false,
         sample_every: 1,

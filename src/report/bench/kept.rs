@@ -53,11 +53,6 @@ impl<'a> Bench<'a> {
         &self.store
     }
 
-    /// Gives the store back (to hand to the next bench).
-    pub fn into_store(self) -> RowStore {
-        self.store
-    }
-
     /// The store's key of `c`'s row: everything the row depends on but the code.
     pub(super) fn row_key(&self, c: &BenchConfig) -> String {
         let s = &self.settings;

@@ -55,6 +55,9 @@ pub struct BenchSettings {
     /// Time `PASS_FRAMES` more frames pass by pass for each configuration's breakdown
     /// (`pass_ms`); `tune`'s cheap rungs go without.
     pub breakdown: bool,
+    /// Also time the path drawn back to back with frames in flight (`pipelined_ms`);
+    /// `tune`'s rungs, which rank by latency and error alone, go without (0 in their rows).
+    pub pipelined: bool,
     /// Play the scene's motion (players, moving lights): frame `i` of the path is posed at
     /// `i / path::FRAME_RATE_HZ` seconds. Off, the scene stands as loaded (its pose at 0).
     pub motion: bool,
@@ -204,7 +207,8 @@ pub struct BenchRow {
     /// kept volumes were built ahead, with their parts, vertices and milliseconds).
     pub prepared: Prepared,
     /// Milliseconds per frame with up to two frames in flight (throughput): the path drawn
-    /// again back to back, bench waiting only for the frame before the one just sent.
+    /// again back to back, bench waiting only for the frame before the one just sent (0 where
+    /// `BenchSettings::pipelined` is off).
     pub pipelined_ms: f64,
     pub shadows_off_frame_ms: Median,
     /// The median frame over the shadows-off median frame.
@@ -531,7 +535,11 @@ fn pass_breakdown(
         frame_ms: timed.iter().map(|t| t.ms).collect(),
         submit_ms: timed.iter().map(|t| t.submit_ms).collect(),
         own_ms: timed.iter().map(|t| t.own_ms).collect(),
-        pipelined_ms: pipelined_ms(renderer, scene, settings, options)?,
+        pipelined_ms: if settings.pipelined {
+            pipelined_ms(renderer, scene, settings, options)?
+        } else {
+            0.0
+        },
         redone: redone.per_frame(),
         syncs: SyncsPerFrame::mean(&syncs),
         passes: BTreeMap::new(),
@@ -718,16 +726,17 @@ impl<'a> Bench<'a> {
     ) -> Result<Vec<BenchRow>, RenderError> {
         let keys: Vec<String> = configs.iter().map(|c| self.row_key(c)).collect();
         let mut kept: Vec<Option<BenchRow>> = keys.iter().map(|k| self.store.get(k)).collect();
-        let todo: Vec<BenchConfig> = configs
+        let (todo, todo_keys): (Vec<BenchConfig>, Vec<String>) = configs
             .iter()
+            .zip(&keys)
             .zip(&kept)
             .filter(|(_, row)| row.is_none())
-            .map(|(c, _)| c.clone())
-            .collect();
+            .map(|((c, k), _)| (c.clone(), k.clone()))
+            .unzip();
         bar.inc((configs.len() - todo.len()) as u64);
-        let mut measured = self.measure_rows(&todo, bar)?.into_iter();
+        let mut measured = self.measure_rows(&todo, &todo_keys, bar)?.into_iter();
         let mut rows = Vec::with_capacity(configs.len());
-        for ((c, key), row) in configs.iter().zip(&keys).zip(&mut kept) {
+        for (c, row) in configs.iter().zip(&mut kept) {
             let row = match row.take() {
                 // Kept under another name (the same options in another section or sweep).
                 Some(row) => BenchRow {
@@ -735,21 +744,20 @@ impl<'a> Bench<'a> {
                     swept: c.swept.clone(),
                     ..row
                 },
-                None => {
-                    let row = measured.next().expect("a row per configuration measured");
-                    self.store.put(key, &row);
-                    row
-                }
+                None => measured.next().expect("a row per configuration measured"),
             };
             rows.push(row);
         }
         Ok(rows)
     }
 
-    /// Measures every configuration given, advancing the bar by one per configuration.
+    /// Measures every configuration given, advancing the bar by one per configuration and
+    /// filing each row in the store under its key as soon as it is measured (a run stopped
+    /// halfway keeps what it finished).
     fn measure_rows(
         &mut self,
         configs: &[BenchConfig],
+        keys: &[String],
         bar: &ProgressBar,
     ) -> Result<Vec<BenchRow>, RenderError> {
         let mut rows = Vec::with_capacity(configs.len());
@@ -758,7 +766,7 @@ impl<'a> Bench<'a> {
         } else {
             HashMap::new()
         };
-        for c in configs {
+        for (c, key) in configs.iter().zip(keys) {
             bar.set_message(c.label());
             let (off, m) = self.timed(c, &interleaved)?;
             let off_ms = median(&mut off.clone());
@@ -843,6 +851,8 @@ impl<'a> Bench<'a> {
                 fallbacks,
                 sampled,
             });
+            self.store
+                .put(key, rows.last().expect("the row just measured"));
             bar.inc(1);
         }
         Ok(rows)

@@ -53,6 +53,7 @@ impl<'a> Lab<'a> {
                 // The figures' sweeps are long; one renderer keeps their memory bounded.
                 interleave: false,
                 breakdown: true,
+                pipelined: true,
                 // The scene as loaded: these measure techniques, not motion.
                 motion: false,
                 sample_every: 1,
