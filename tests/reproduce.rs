@@ -1,11 +1,13 @@
 //! `reproduce` in its quick form: every section is measured and written, and the numbers that
-//! the paper's figures are about go the way the figures say (on oa_dm1 at 320x240).
+//! the paper's figures are about go the way the figures say (on oa_dm1 at 320x240). The same
+//! run split into two shards and merged gives the same sections and error figures.
 
 mod common;
 
 use common::{gl_on, openarena_data};
 use shadowlab::options::{BackendChoice, Options};
 use shadowlab::report::reproduce::{self, Section, Settings};
+use shadowlab::report::shard::Shard;
 use std::path::Path;
 
 /// A number the section recorded; a missing one fails, naming what the section has.
@@ -210,5 +212,56 @@ fn quick_report_measures_every_section_and_writes_it() {
     // says which pixels may differ and why).
     let v = section("vector-subdivision");
     assert!(n(v, "disagreement_excl_boundary") < 0.0005);
+
+    // The same run as two shards, merged: the same sections in the same order, the same
+    // configurations with the same error figures (times aside), every image.
+    let parts: Vec<_> = (1..=2).map(|k| out.join(format!("part{k}"))).collect();
+    for (k, part) in parts.iter().enumerate() {
+        let shard = Settings {
+            shard: Shard {
+                index: k + 1,
+                count: 2,
+            },
+            ..settings.clone()
+        };
+        reproduce::run(&mut renderer, &shard, part).unwrap_or_else(|e| panic!("{e}"));
+    }
+    let merged_dir = out.join("merged");
+    let merged = reproduce::merge(&reproduce::unit_names(&settings), &parts, &merged_dir)
+        .unwrap_or_else(|e| panic!("{e}"));
+    let ids = |r: &reproduce::Report| r.sections.iter().map(|s| s.id.clone()).collect::<Vec<_>>();
+    assert_eq!(ids(&merged), ids(&report));
+    let errors = |r: &reproduce::Report| {
+        r.rows
+            .iter()
+            .map(|row| {
+                (
+                    row.label.clone(),
+                    row.error.total,
+                    row.error_per_light.clone(),
+                )
+            })
+            .collect::<Vec<_>>()
+    };
+    let (merged_errors, single_errors) = (errors(&merged), errors(&report));
+    assert_eq!(merged_errors.len(), single_errors.len());
+    let differ: Vec<_> = merged_errors
+        .iter()
+        .zip(&single_errors)
+        .filter(|(m, s)| m != s)
+        .map(|(m, s)| format!("{}: merged {} against {}", s.0, m.1, s.1))
+        .collect();
+    assert!(differ.is_empty(), "{differ:#?}");
+    for f in report.sections.iter().flat_map(|s| &s.figures) {
+        assert!(merged_dir.join(&f.file).is_file(), "{} missing", f.file);
+    }
+    // Each shard measured only its own units.
+    let part_rows = |p: &Path| {
+        let text = std::fs::read_to_string(p.join("part.json")).unwrap();
+        let part: serde_json::Value = serde_json::from_str(&text).unwrap();
+        part["results"].as_array().unwrap().len()
+    };
+    let units = reproduce::unit_names(&settings).len();
+    assert_eq!(part_rows(&parts[0]) + part_rows(&parts[1]), units);
     let _ = std::fs::remove_dir_all(&out);
 }

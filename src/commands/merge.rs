@@ -5,6 +5,7 @@ use super::bench::{ROWS, write_outputs};
 use super::check::{LINES, failures};
 use anyhow::{Context, Result, bail};
 use shadowlab::report::bench::BenchRow;
+use shadowlab::report::reproduce;
 use shadowlab::report::shard::{self, Manifest, ShardError};
 use std::io::Write;
 use std::path::PathBuf;
@@ -14,7 +15,8 @@ pub struct Args {
     /// The parts' folders (each holds shard.json), in any order.
     #[arg(required = true)]
     parts: Vec<PathBuf>,
-    /// Also write the merged run to DIR, as one unsharded run's `--out` would.
+    /// Also write the merged run to DIR, as one unsharded run's `--out` would (needed for
+    /// `reproduce`, whose output is a folder).
     #[arg(long, value_name = "DIR")]
     out: Option<PathBuf>,
 }
@@ -24,6 +26,22 @@ pub fn run(args: &Args) -> Result<()> {
     match whole.command.as_str() {
         "check" => merge_check(&whole, &parts, args.out.as_ref()),
         "bench" => merge_bench(&whole, &parts, args.out.as_ref()),
+        "reproduce" => {
+            let out = args
+                .out
+                .as_ref()
+                .context("merging parts of `reproduce` needs --out DIR for the report")?;
+            let report = reproduce::merge(&whole.units, &parts, out)?;
+            whole.write(out)?;
+            eprintln!(
+                "wrote {} ({} sections, {} configurations, {:.1} minutes of the parts)",
+                out.join("index.html").display(),
+                report.sections.len(),
+                report.rows.len(),
+                report.elapsed_s / 60.0
+            );
+            Ok(())
+        }
         other => bail!("cannot merge parts of `{other}`"),
     }
 }

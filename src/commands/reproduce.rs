@@ -4,6 +4,7 @@ use super::{CommonArgs, start_gl};
 use anyhow::{Context, Result, bail};
 use shadowlab::options::Options;
 use shadowlab::report::reproduce::{self, Settings};
+use shadowlab::report::shard::{Manifest, Shard};
 use std::path::PathBuf;
 
 #[derive(clap::Args)]
@@ -31,6 +32,25 @@ pub struct Args {
     /// Measure everything anew and keep nothing on disk.
     #[arg(long, conflicts_with = "keep")]
     fresh: bool,
+    /// Measure only shard K of N of the run's units (`K/N`: every N-th of the list from the
+    /// K-th; a unit is a scene's figures and claims, a hard case, or a scene's sweep), writing
+    /// OUT/part.json and OUT/shard.json for `shadowlab merge`, which writes the whole report.
+    #[arg(long, value_name = "K/N")]
+    shard: Option<String>,
+}
+
+/// What a shard's results depend on besides its units (a manifest's settings).
+pub fn manifest_settings(settings: &Settings) -> String {
+    format!(
+        "{} {}x{} warmup={} frames={} quick={} sets={:?}",
+        settings.scenes_dir.display(),
+        settings.width,
+        settings.height,
+        settings.warmup,
+        settings.frames,
+        settings.quick,
+        settings.sets
+    )
 }
 
 pub fn run(common: &CommonArgs, args: &Args) -> Result<()> {
@@ -55,6 +75,18 @@ pub fn run(common: &CommonArgs, args: &Args) -> Result<()> {
     settings.progress = true;
     settings.keep =
         (!args.fresh).then(|| args.keep.clone().unwrap_or_else(|| args.out.join("rows")));
+    if let Some(s) = &args.shard {
+        settings.shard = Shard::parse(s)?;
+        Manifest {
+            command: "reproduce".into(),
+            shard: settings.shard,
+            units: reproduce::unit_names(&settings),
+            settings: manifest_settings(&settings),
+            version: env!("CARGO_PKG_VERSION").into(),
+        }
+        .write(&args.out)
+        .with_context(|| format!("cannot write the manifest in {}", args.out.display()))?;
+    }
     // The context is made once for the whole run, on the chosen path.
     let mut options = Options::default();
     if let Some(b) = &common.backend {

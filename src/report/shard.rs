@@ -1,4 +1,5 @@
-//! Sharded runs: a long command's independent units (maps, for `check`) split deterministically
+//! Sharded runs: a long command's independent units (`check`'s maps, `bench`'s configurations,
+//! `reproduce`'s scenes and sweeps) split deterministically
 //! into N shards that separate processes or machines run (`--shard K/N --out DIR`), each writing
 //! its part with a manifest; `shadowlab merge` joins the parts into what one run writes. Spreading
 //! the shards is left to a job runner (docs/shards.md).

@@ -3,14 +3,14 @@
 use super::bench::BenchRow;
 
 /// How a column's cells line up.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 pub enum Align {
     Left,
     Right,
 }
 
 /// A table of text cells with a header row.
-#[derive(Debug, Clone, Default, PartialEq)]
+#[derive(Debug, Clone, Default, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Table {
     pub header: Vec<(String, Align)>,
     pub rows: Vec<Vec<String>>,

@@ -16,7 +16,9 @@ mod lab;
 mod page;
 mod pareto;
 mod thesis;
+mod units;
 pub use pareto::fixed_sweep;
+pub use units::names as unit_names;
 
 pub use lab::{Lab, pct};
 
@@ -26,15 +28,13 @@ const PAPER_FRAME: &[&str] = &["plan.enabled=false"];
 use super::bench::BenchRow;
 use super::table::Table;
 use crate::options::{OptionError, Options};
-use crate::report::bench::{Kept, View};
-use crate::report::store::RowStore;
+use crate::report::shard::Shard;
 use crate::run::{RenderError, Renderer};
 use crate::scene::Scene;
 use crate::scene_file::SceneFileError;
 use crate::scene_file::load::{LoadError, Loaded, load_file};
 use indicatif::ProgressBar;
 use std::collections::BTreeMap;
-use std::collections::HashMap;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
@@ -62,6 +62,8 @@ pub enum ReproduceError {
     Json(#[from] serde_json::Error),
     #[error(transparent)]
     Tune(#[from] crate::report::tune::TuneError),
+    #[error(transparent)]
+    Shard(#[from] crate::report::shard::ShardError),
 }
 
 /// What a run measures and how much.
@@ -82,6 +84,8 @@ pub struct Settings {
     /// that a run interrupted or run again measures only what it lacks; None keeps them for
     /// this run only (a configuration met twice is still measured once).
     pub keep: Option<PathBuf>,
+    /// The run's units this process measures (`units::names`): all, or one shard's.
+    pub shard: Shard,
 }
 
 impl Settings {
@@ -97,6 +101,7 @@ impl Settings {
             sets: Vec::new(),
             progress: true,
             keep: None,
+            shard: Shard::WHOLE,
         }
     }
 
@@ -130,14 +135,14 @@ impl Settings {
 }
 
 /// An image of a section, as a file in the output folder.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Figure {
     pub file: String,
     pub caption: String,
 }
 
 /// One figure or claim of the paper, with our measurement.
-#[derive(Debug, Clone, Default)]
+#[derive(Debug, Clone, Default, serde::Serialize, serde::Deserialize)]
 pub struct Section {
     pub id: String,
     pub title: String,
@@ -227,21 +232,6 @@ fn load_scene(
     Ok((scene, options, warnings))
 }
 
-/// Loads a benchmark scene and uploads it to the renderer, adding the time to the report's
-/// `loading_s`.
-fn upload(
-    renderer: &mut Renderer,
-    settings: &Settings,
-    name: &str,
-    report: &mut Report,
-) -> Result<(Scene, Options, Vec<String>), ReproduceError> {
-    let start = Instant::now();
-    let loaded = load_scene(settings, name)?;
-    renderer.load_scene(&loaded.0)?;
-    report.loading_s += start.elapsed().as_secs_f64();
-    Ok(loaded)
-}
-
 /// A section measured on one lab.
 type SectionFn = fn(&mut Lab) -> Result<Section, ReproduceError>;
 
@@ -264,13 +254,13 @@ const ORDER: &[&str] = &[
     "vector-subdivision",
 ];
 
-/// The bar over `units` units of work, hidden unless `settings.progress`.
-fn progress_bar(settings: &Settings, units: usize) -> ProgressBar {
+/// The bar over the run's sections, hidden unless `settings.progress`.
+fn progress_bar(settings: &Settings) -> ProgressBar {
     if !settings.progress {
         return ProgressBar::hidden();
     }
-    let b =
-        ProgressBar::with_draw_target(Some(units as u64), crate::report::progress::draw_target());
+    // The length is set once the units are known (`units::measure`).
+    let b = ProgressBar::with_draw_target(Some(0), crate::report::progress::draw_target());
     b.set_style(crate::report::progress::style(
         "reproduce [{elapsed_precise}] {bar:30} {pos}/{len} sections, {left} left, {peak}  {msg}",
     ));
@@ -331,125 +321,53 @@ fn timed<'a>(
     Ok(s)
 }
 
-/// Runs every section and writes `out/index.html`, `out/index.md`, `out/results.json` and the
-/// images.
+/// Runs every section (or a shard's units) and writes `out/index.html`, `out/index.md`,
+/// `out/results.json` and the images; a shard also writes its part (`units::PART`) for
+/// [`merge`].
 pub fn run(
     renderer: &mut Renderer,
     settings: &Settings,
     out: &Path,
 ) -> Result<Report, ReproduceError> {
-    let start = Instant::now();
-    std::fs::create_dir_all(out).map_err(|source| ReproduceError::Io {
-        path: out.to_path_buf(),
-        source,
-    })?;
-    let sweep_scenes = settings.sweep_scenes();
-    // Units of work: the figure sections and both claims, then one sweep per scene.
-    let figure_units =
-        figures::SECTIONS + 2 * claims::SECTIONS + thesis::SECTIONS + forsyth::SECTIONS;
-    let bar = progress_bar(settings, figure_units + sweep_scenes.len());
-    let mut report = Report {
-        environment: environment(renderer, settings),
-        ..Report::default()
+    let io = |path: &Path| {
+        let path = path.to_path_buf();
+        move |source| ReproduceError::Io { path, source }
     };
-    let mut sections: Vec<Section> = Vec::new();
-    let mut store = match &settings.keep {
-        Some(dir) => RowStore::on_disk(dir).map_err(|source| ReproduceError::Io {
-            path: dir.clone(),
-            source,
-        })?,
-        None => RowStore::in_memory(),
-    };
-    // Exact masks and errors by scene, for the next lab of the same scene.
-    let mut views: HashMap<String, View> = HashMap::new();
+    std::fs::create_dir_all(out).map_err(io(out))?;
+    let bar = progress_bar(settings);
+    let part = units::measure(renderer, settings, out, &bar)?;
+    bar.finish_and_clear();
+    if settings.shard != Shard::WHOLE {
+        let path = out.join(units::PART);
+        std::fs::write(&path, serde_json::to_string(&part)?).map_err(io(&path))?;
+    }
+    let report = part.report();
+    page::write(&report, out)?;
+    Ok(report)
+}
 
-    // The figures and the claims on the scenes they name.
-    for name in ["oa_dm1", "q3dm6ish"] {
-        if settings.quick && name != "oa_dm1" {
-            continue;
-        }
-        let (scene, options, warnings) = upload(renderer, settings, name, &mut report)?;
-        report
-            .environment
-            .extend(warnings.iter().map(|w| format!("{name}: {w}")));
-        let view = views.remove(name).unwrap_or_default();
-        let mut lab = Lab::new(renderer, &scene, name, options, settings, out, &bar)
-            .with_kept(Kept { store, view });
-        if name == "oa_dm1" {
-            sections.extend(figures::run(&mut lab)?);
-            sections.push(timed(&mut lab, thesis::chapter5)?);
-            bar.inc(1);
-            for section in [forsyth::ids, forsyth::shootout, forsyth::subdivision] {
-                sections.push(timed(&mut lab, section)?);
-                bar.inc(1);
+/// Joins the parts of a sharded run (`dirs`, every unit of `units` once) into `out`: the
+/// report one run writes, with every part's images. The run's time is the parts' times added.
+pub fn merge(units: &[String], dirs: &[PathBuf], out: &Path) -> Result<Report, ReproduceError> {
+    let io = |path: &Path| {
+        let path = path.to_path_buf();
+        move |source| ReproduceError::Io { path, source }
+    };
+    std::fs::create_dir_all(out).map_err(io(out))?;
+    let mut parts = Vec::with_capacity(dirs.len());
+    for dir in dirs {
+        let path = dir.join(units::PART);
+        let text = std::fs::read_to_string(&path).map_err(io(&path))?;
+        parts.push(serde_json::from_str::<units::Part>(&text)?);
+        for entry in std::fs::read_dir(dir).map_err(io(dir))? {
+            let from = entry.map_err(io(dir))?.path();
+            if from.extension().is_some_and(|e| e == "png") {
+                let to = out.join(from.file_name().unwrap_or_default());
+                std::fs::copy(&from, &to).map_err(io(&to))?;
             }
         }
-        sections.extend(claims::run(&mut lab)?);
-        let (rows, kept) = lab.into_parts();
-        store = kept.store;
-        views.insert(name.to_string(), kept.view);
-        report.rows.extend(rows);
     }
-    if settings.quick {
-        // q3dm6ish's claims were skipped: count them as done.
-        bar.inc(claims::SECTIONS as u64);
-    }
-    // ID and priority buffers on the grazing light, where depth maps need their bias most;
-    // multiple frusta where the camera faces an omni light; mipmapped priority buffers where
-    // shadow stripes are finer than a pixel; perspective shadow maps on the hard
-    // case made for them.
-    for (case, section) in [
-        ("grazing", forsyth::buffers as SectionFn),
-        ("duelling_omni", forsyth::frusta),
-        ("minified_grate", forsyth::priority_mips),
-        ("near_receiver", thesis::chapter4),
-    ] {
-        let (scene, options, _) =
-            upload(renderer, settings, &format!("../hard/{case}"), &mut report)?;
-        let mut lab = Lab::new(renderer, &scene, case, options, settings, out, &bar)
-            .with_kept(Kept {
-                store,
-                view: View::default(),
-            })
-            .with_scene_file(&format!("assets/hard/{case}.toml"));
-        sections.push(timed(&mut lab, section)?);
-        let (rows, kept) = lab.into_parts();
-        store = kept.store;
-        report.rows.extend(rows);
-        bar.inc(1);
-    }
-
-    // Accuracy against time on every scene.
-    let mut sweeps = Vec::new();
-    for name in sweep_scenes {
-        let (scene, options, warnings) = upload(renderer, settings, name, &mut report)?;
-        if !settings.quick || *name != "oa_dm1" {
-            report
-                .environment
-                .extend(warnings.iter().map(|w| format!("{name}: {w}")));
-        }
-        let view = views.remove(*name).unwrap_or_default();
-        let mut lab = Lab::new(renderer, &scene, name, options, settings, out, &bar)
-            .with_kept(Kept { store, view });
-        sweeps.push(timed(&mut lab, pareto::run)?);
-        sweeps.push(timed(&mut lab, |lab| thesis::comparison(lab, lab.rows()))?);
-        sweeps.push(timed(&mut lab, pareto::frontier)?);
-        // The sweep is the scene's last lab: its view (the reference's BVH with it) goes.
-        let (rows, kept) = lab.into_parts();
-        store = kept.store;
-        report.rows.extend(rows);
-        bar.inc(1);
-    }
-    report.environment.sort();
-    report.environment.dedup();
-    report.reuse = store.summary();
-
-    let mut merged = merged_in_order(sections);
-    report.summary = summary(&merged, &sweeps);
-    merged.extend(sweeps);
-    report.sections = merged;
-    report.elapsed_s = start.elapsed().as_secs_f64();
-    bar.finish_and_clear();
+    let report = units::Part::join(units, parts)?.report();
     page::write(&report, out)?;
     Ok(report)
 }

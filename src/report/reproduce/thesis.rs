@@ -11,9 +11,6 @@ use crate::report::bench::BenchRow;
 use crate::report::plot;
 use crate::report::table::{Align, Table};
 
-/// Units of progress: chapters 4 and 5 (the comparisons ride on the scene sweeps).
-pub const SECTIONS: usize = 2;
-
 /// The four algorithms (and trapezoidal maps) as the scene sweeps measure them: the label of
 /// each one's row there and its technique.
 pub const FOUR: [(&str, &str); 5] = [
