@@ -125,8 +125,13 @@ impl<'a> Bench<'a> {
     /// Whether every measured frame shows what the first shows: one camera, and a scene that
     /// stands (or is held). Sampling such frames again would draw the same masks.
     pub(super) fn path_is_still(&self) -> bool {
-        let moving = self.settings.motion && !self.scene.motion.is_still();
-        self.settings.path.len() == 1 && !moving
+        self.settings.path.len() == 1 && !self.scene_moves()
+    }
+
+    /// Whether the measured frames pose the scene at their own times and something in it
+    /// moves.
+    fn scene_moves(&self) -> bool {
+        self.settings.motion && !self.scene.motion.is_still()
     }
 
     /// Every measured frame of the path with `options`, its masks drawn (untimed) and sampled:
@@ -136,7 +141,7 @@ impl<'a> Bench<'a> {
         options: &Options,
     ) -> Result<Vec<PathSample>, RenderError> {
         let mut out = Vec::with_capacity(self.settings.frames);
-        let moving = self.settings.motion && !self.scene.motion.is_still();
+        let moving = self.scene_moves();
         for i in (0..self.settings.frames.max(1)).step_by(self.settings.sample_every.max(1)) {
             self.settings.pose(&mut self.scene, i);
             let camera = self.settings.camera(&self.scene, i);

@@ -1,7 +1,7 @@
 //! Rows kept by content ([`RowStore`]): a bench takes the configurations its store holds
 //! instead of measuring them again.
 
-use super::{Bench, BenchConfig, View, options_key};
+use super::{Bench, BenchConfig, BenchSettings, View, options_key};
 use crate::report::store::{RowStore, key, scene_fingerprint};
 
 /// What one bench of a scene hands on to the next: the rows kept, and the exact masks and
@@ -55,17 +55,13 @@ impl<'a> Bench<'a> {
 
     /// The store's key of `c`'s row: everything the row depends on but the code.
     pub(super) fn row_key(&self, c: &BenchConfig) -> String {
-        let s = &self.settings;
+        // Every setting but the progress bar, so that a setting added later is in the key too.
         let frames = format!(
-            "{} {} {:?} {} {} {} {} {:?}",
-            s.warmup,
-            s.frames,
-            s.path,
-            s.motion,
-            s.breakdown,
-            s.sample_every,
-            s.interleave,
-            s.memory_mb
+            "{:?}",
+            BenchSettings {
+                progress: false,
+                ..self.settings.clone()
+            }
         );
         let caps = self.renderer.caps();
         let gl = format!("{} {} {}", caps.renderer, caps.version, caps.vendor);

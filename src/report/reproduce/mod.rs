@@ -321,6 +321,12 @@ fn timed<'a>(
     Ok(s)
 }
 
+/// The error of an I/O failure on `path`.
+fn io(path: &Path) -> impl FnOnce(std::io::Error) -> ReproduceError {
+    let path = path.to_path_buf();
+    move |source| ReproduceError::Io { path, source }
+}
+
 /// Runs every section (or a shard's units) and writes `out/index.html`, `out/index.md`,
 /// `out/results.json` and the images; a shard also writes its part (`units::PART`) for
 /// [`merge`].
@@ -329,10 +335,6 @@ pub fn run(
     settings: &Settings,
     out: &Path,
 ) -> Result<Report, ReproduceError> {
-    let io = |path: &Path| {
-        let path = path.to_path_buf();
-        move |source| ReproduceError::Io { path, source }
-    };
     std::fs::create_dir_all(out).map_err(io(out))?;
     let bar = progress_bar(settings);
     let part = units::measure(renderer, settings, out, &bar)?;
@@ -349,10 +351,6 @@ pub fn run(
 /// Joins the parts of a sharded run (`dirs`, every unit of `units` once) into `out`: the
 /// report one run writes, with every part's images. The run's time is the parts' times added.
 pub fn merge(units: &[String], dirs: &[PathBuf], out: &Path) -> Result<Report, ReproduceError> {
-    let io = |path: &Path| {
-        let path = path.to_path_buf();
-        move |source| ReproduceError::Io { path, source }
-    };
     std::fs::create_dir_all(out).map_err(io(out))?;
     let mut parts = Vec::with_capacity(dirs.len());
     for dir in dirs {

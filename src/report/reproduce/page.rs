@@ -16,10 +16,7 @@ figure.wide,figure.wide img{max-width:100%}code{background:#f2f2f2;padding:0 .2e
 .note{font-size:85%;color:#555}";
 
 fn write_file(path: &Path, text: &str) -> Result<(), ReproduceError> {
-    std::fs::write(path, text).map_err(|source| ReproduceError::Io {
-        path: path.to_path_buf(),
-        source,
-    })
+    std::fs::write(path, text).map_err(super::io(path))
 }
 
 fn is_plot(file: &str) -> bool {

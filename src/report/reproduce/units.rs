@@ -5,7 +5,7 @@
 use super::lab::Lab;
 use super::{
     Report, ReproduceError, Section, SectionFn, Settings, claims, environment, figures, forsyth,
-    load_scene, merged_in_order, pareto, summary, thesis, timed,
+    io, load_scene, merged_in_order, pareto, summary, thesis, timed,
 };
 use crate::options::Options;
 use crate::report::bench::{BenchRow, Kept, View};
@@ -169,10 +169,7 @@ pub fn measure(
         .collect();
     bar.set_length(taken.iter().map(Kind::sections).sum::<usize>() as u64);
     let store = match &settings.keep {
-        Some(dir) => RowStore::on_disk(dir).map_err(|source| ReproduceError::Io {
-            path: dir.clone(),
-            source,
-        })?,
+        Some(dir) => RowStore::on_disk(dir).map_err(io(dir))?,
         None => RowStore::in_memory(),
     };
     let environment = environment(renderer, settings);
