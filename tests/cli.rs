@@ -294,6 +294,62 @@ fn bench_under_the_gpu_profile_waits_for_nothing_in_a_timed_frame() {
     std::fs::remove_dir_all(&dir).ok();
 }
 
+/// Issue 41: `bench --enough-seconds S` measures one frame of a configuration whose first
+/// takes S seconds or more, on a still camera only, round-robin and `--sequential`: with S
+/// a microsecond every row of the still camera has one frame, every row of a turn (each
+/// frame another pose, so one would stand for the start of the path only) and every row
+/// without the flag all three. Made to fail: with `enough` ignoring the path (moving
+/// cameras cut too), the turn's rows have one frame.
+#[test]
+fn bench_enough_seconds_cuts_long_frames_on_a_still_camera_only() {
+    let dir = temp("bench-enough");
+    let cases = [
+        ("still", Some("0.000001"), false, 1),
+        ("still", Some("0.000001"), true, 1),
+        ("turn", Some("0.000001"), false, 3),
+        ("turn", Some("0.000001"), true, 3),
+        ("still", None, true, 3),
+    ];
+    for (k, (path, enough, sequential, frames)) in cases.into_iter().enumerate() {
+        let json = dir.join(format!("r{k}.json"));
+        let mut c = shadowlab();
+        c.current_dir(&dir).args([
+            "bench",
+            "--sweep",
+            "technique=none,shadow_map",
+            "--size",
+            "160x120",
+            "--set",
+            "estimate.samples=0",
+            "--frames",
+            "3",
+            "--warmup",
+            "0",
+            "--path",
+            path,
+        ]);
+        if let Some(s) = enough {
+            c.args(["--enough-seconds", s]);
+        }
+        if sequential {
+            c.arg("--sequential");
+        }
+        stdout_of(c.arg("--json").arg(&json).output().unwrap());
+        let rows: Vec<serde_json::Value> =
+            serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+        assert_eq!(rows.len(), 2);
+        for row in &rows {
+            assert_eq!(
+                row["frames"].as_u64(),
+                Some(frames),
+                "{path} {enough:?} sequential={sequential}: {row}"
+            );
+            assert!(row["frame_ms"]["median"].as_f64().unwrap() > 0.0, "{row}");
+        }
+    }
+    std::fs::remove_dir_all(&dir).ok();
+}
+
 /// Issue 39, as a person runs it: `bench --sweep technique=none,shadow_map` gives each row its
 /// CPU milliseconds per frame (`cpu_ms`, the call's part of each timed frame: median and 99th
 /// percentile) and its frame-by-frame ratio to the shadows-off frame at the same path frame

@@ -255,7 +255,7 @@ fn frame(
         parts: lv.parts.clone(),
         draws: lv.draws.clone(),
         stats: lv.stats,
-        uploads_vertices: lv.upload.vertices.is_some(),
+        uploads_vertices: lv.upload.meshes.is_some(),
         plan,
         need,
     }

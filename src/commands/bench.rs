@@ -44,6 +44,11 @@ pub struct Args {
     /// once). Each renderer's own maps stay within `shadow_map.budget_mb`.
     #[arg(long, value_name = "MIB")]
     memory_mb: Option<f32>,
+    /// On a still camera with the scene standing, a configuration's measured frames (and its
+    /// pipelined and per-pass frames) stop once they add up to this many seconds, one frame
+    /// at least: for sweeps whose frames take seconds (default: all of --frames).
+    #[arg(long, value_name = "S")]
+    enough_seconds: Option<f64>,
     /// Time one configuration after another on one renderer, instead of round-robin (one frame
     /// of each configuration and baseline in turn, each on its own renderer), which keeps the
     /// ratios steady when the machine's speed drifts.
@@ -156,6 +161,7 @@ pub fn run(common: &CommonArgs, args: &Args) -> Result<()> {
         motion: !args.no_motion,
         sample_every: args.sample_every.unwrap_or(if recorded { 4 } else { 1 }),
         memory_mb: args.memory_mb,
+        enough_seconds: args.enough_seconds.filter(|s| *s > 0.0),
     };
     let manifest = Manifest {
         command: "bench".into(),

@@ -24,6 +24,11 @@ pub struct Args {
     /// Unmeasured frames before each configuration (default 1, 0 with --quick).
     #[arg(long)]
     warmup: Option<usize>,
+    /// A configuration's measured frames (and its pipelined and per-pass frames) stop once
+    /// they add up to this many seconds, one frame at least: the paper's frame on the large
+    /// maps takes seconds a frame. 0: every configuration all its frames.
+    #[arg(long, value_name = "S", default_value_t = shadowlab::report::bench::ENOUGH_SECONDS)]
+    enough_seconds: f64,
     /// Where measured configurations are kept by content (the code, GL, scene, options and
     /// frame settings), so that a run interrupted or run again measures only what it lacks
     /// (default: OUT/rows). A rebuilt binary measures everything anew.
@@ -42,12 +47,13 @@ pub struct Args {
 /// What a shard's results depend on besides its units (a manifest's settings).
 pub fn manifest_settings(settings: &Settings) -> String {
     format!(
-        "{} {}x{} warmup={} frames={} quick={} sets={:?}",
+        "{} {}x{} warmup={} frames={} enough={:?} quick={} sets={:?}",
         settings.scenes_dir.display(),
         settings.width,
         settings.height,
         settings.warmup,
         settings.frames,
+        settings.enough_seconds,
         settings.quick,
         settings.sets
     )
@@ -71,6 +77,7 @@ pub fn run(common: &CommonArgs, args: &Args) -> Result<()> {
     }
     settings.frames = args.frames.unwrap_or(settings.frames).max(1);
     settings.warmup = args.warmup.unwrap_or(settings.warmup);
+    settings.enough_seconds = (args.enough_seconds > 0.0).then_some(args.enough_seconds);
     settings.sets = common.sets.clone();
     settings.progress = true;
     settings.keep =

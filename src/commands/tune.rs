@@ -47,6 +47,11 @@ pub struct Args {
     /// hold). Each renderer's own maps stay within `shadow_map.budget_mb`.
     #[arg(long, value_name = "MIB", default_value_t = shadowlab::report::tune::DEFAULT_MEMORY_MB)]
     memory_mb: f32,
+    /// On a still camera, a candidate's measured frames stop once they add up to this many
+    /// seconds, one frame at least (a frame of seconds is its own long sample). 0: every
+    /// candidate all its frames.
+    #[arg(long, value_name = "S", default_value_t = shadowlab::report::bench::ENOUGH_SECONDS)]
+    enough_seconds: f64,
     /// Folder for tune.md, tune.json and tune.png (default: tune-<scene>).
     #[arg(long)]
     out: Option<PathBuf>,
@@ -154,6 +159,7 @@ pub fn run(common: &CommonArgs, args: &Args) -> Result<()> {
     settings.per_light = !args.no_per_light;
     settings.accuracy = args.accuracy;
     settings.memory_mb = (args.memory_mb > 0.0).then_some(args.memory_mb);
+    settings.enough_seconds = (args.enough_seconds > 0.0).then_some(args.enough_seconds);
     let (_ctx, mut renderer) = start_gl(&options)?;
     renderer.load_scene(&scene)?;
     eprintln!(

@@ -28,6 +28,41 @@ impl LightVolumes<'_> {
     }
 }
 
+/// Vertices gathered into one `glBufferSubData` (1 MiB): a light's meshes are thousands of
+/// small components, each a call of its own otherwise.
+const BATCH_VERTICES: usize = 65536;
+
+/// Writes `meshes` one after another into the bound array buffer from vertex `at` on, small
+/// ones gathered into batches, large ones directly.
+fn write_batched<'a>(gl: &glow::Context, at: usize, meshes: impl Iterator<Item = &'a [[f32; 4]]>) {
+    let vertex_bytes = std::mem::size_of::<[f32; 4]>();
+    let mut batch: Vec<[f32; 4]> = Vec::new();
+    // The vertex the batch starts at, and the one the next mesh starts at.
+    let (mut batch_at, mut next) = (at, at);
+    let flush = |batch: &mut Vec<[f32; 4]>, batch_at: usize| {
+        if !batch.is_empty() {
+            buffer_sub_data(gl, glow::ARRAY_BUFFER, batch_at * vertex_bytes, batch);
+            batch.clear();
+        }
+    };
+    for mesh in meshes {
+        if batch.len() + mesh.len() > BATCH_VERTICES {
+            flush(&mut batch, batch_at);
+            batch_at = next;
+        }
+        if mesh.len() >= BATCH_VERTICES {
+            if !mesh.is_empty() {
+                buffer_sub_data(gl, glow::ARRAY_BUFFER, next * vertex_bytes, mesh);
+            }
+            batch_at = next + mesh.len();
+        } else {
+            batch.extend_from_slice(mesh);
+        }
+        next += mesh.len();
+    }
+    flush(&mut batch, batch_at);
+}
+
 /// Every light's volume buffers.
 #[derive(Default)]
 pub struct VolumeBuffers {
@@ -42,7 +77,7 @@ impl VolumeBuffers {
             std::collections::hash_map::Entry::Vacant(e) => e.insert(Buffers::new(gl)?),
         };
         let up = &draws.upload;
-        if let Some(vertices) = &up.vertices {
+        if let Some(meshes) = draws.upload_vertices() {
             let vertex_bytes = std::mem::size_of::<[f32; 4]>();
             // SAFETY: uploads plain f32 vertices; attribute 0 is a vec4 position. The planner
             // allocates before writing past what the buffer holds (`VolumeUpload::allocate`).
@@ -58,9 +93,7 @@ impl VolumeBuffers {
                     gl.enable_vertex_attrib_array(0);
                     gl.vertex_attrib_pointer_f32(0, 4, glow::FLOAT, false, 16, 0);
                 }
-                if !vertices.is_empty() {
-                    buffer_sub_data(gl, glow::ARRAY_BUFFER, up.at * vertex_bytes, vertices);
-                }
+                write_batched(gl, up.at, meshes);
                 gl.bind_vertex_array(None);
                 gl.bind_buffer(glow::ARRAY_BUFFER, None);
             }

@@ -239,6 +239,9 @@ pub struct TuneSettings {
     /// are timed a group at a time (`BenchSettings::memory_mb`). Each renderer's own maps
     /// stay within `shadow_map.budget_mb`.
     pub memory_mb: Option<f32>,
+    /// A candidate's frames stop once they add up to this many seconds, on a still camera
+    /// (`BenchSettings::enough_seconds`).
+    pub enough_seconds: Option<f64>,
 }
 
 /// `TuneSettings::memory_mb` unless told otherwise: with a renderer's maps within
@@ -259,6 +262,7 @@ impl TuneSettings {
             accuracy: 0.5,
             path,
             memory_mb: Some(DEFAULT_MEMORY_MB),
+            enough_seconds: Some(crate::report::bench::ENOUGH_SECONDS),
         }
     }
 }
@@ -436,6 +440,7 @@ fn measure_stage(
         motion: false,
         sample_every: 1,
         memory_mb: settings.memory_mb,
+        enough_seconds: settings.enough_seconds,
     };
     let mut bench = Bench::new(renderer, scene, bench).with_kept(std::mem::take(kept));
     let rows = bench.run_with(configs, bar);

@@ -81,17 +81,13 @@ impl LightVolumeDraws {
     /// after it, noted as what the buffer holds; returns its vertices.
     fn ready_kept_region(&mut self) -> usize {
         let kept = self.kept_region();
-        let mut vertices = Vec::with_capacity(kept.vertices);
-        for id in &kept.meshes {
-            vertices.extend_from_slice(&self.meshes[id].mesh.vertices);
-        }
         let allocate = with_headroom(kept.vertices);
         self.kept_layout = kept.hash;
         self.capacity = allocate;
         // No frame's layout yet: the first frame writes what follows the kept region.
         self.layout = 0;
         self.upload = VolumeUpload {
-            vertices: Some(vertices),
+            meshes: Some(kept.meshes),
             at: 0,
             allocate: Some(allocate),
             indices: None,

@@ -306,12 +306,15 @@ impl LightVolumeDraws {
     }
 
     /// The vertices of the layout's meshes from mesh `from` on, in order.
-    pub(super) fn vertices(&self, layout: &Layout, from: usize) -> Vec<[f32; 4]> {
-        let mut vertices: Vec<[f32; 4]> = Vec::with_capacity(layout.vertex_count);
-        for id in &layout.order[from..] {
-            vertices.extend_from_slice(&self.meshes[id].mesh.vertices);
-        }
-        vertices
+    /// The upload's vertices (`vec4`, w = 0 at infinity), mesh by mesh in buffer order from
+    /// `upload.at` on; None when nothing is to be uploaded.
+    pub fn upload_vertices(&self) -> Option<impl Iterator<Item = &[[f32; 4]]>> {
+        let meshes = self.upload.meshes.as_ref()?;
+        Some(
+            meshes
+                .iter()
+                .map(|id| self.meshes[id].mesh.vertices.as_slice()),
+        )
     }
 
     /// What to upload for `layout`: nothing while the buffer holds it; the vertices after the
@@ -325,13 +328,13 @@ impl LightVolumeDraws {
             let allocate = with_headroom(layout.vertex_count);
             self.capacity = allocate;
             Some(VertexUpload {
-                vertices: self.vertices(layout, 0),
+                meshes: layout.order.clone(),
                 at: 0,
                 allocate: Some(allocate),
             })
         } else if changed {
             Some(VertexUpload {
-                vertices: self.vertices(layout, layout.kept_meshes),
+                meshes: layout.order[layout.kept_meshes..].to_vec(),
                 at: layout.kept_vertices,
                 allocate: None,
             })
@@ -360,7 +363,7 @@ pub(super) struct KeptRegion {
 /// What [`LightVolumeDraws::upload_for`] decides: vertices written from vertex `at` on, the
 /// buffer allocated for `allocate` vertices first.
 pub(super) struct VertexUpload {
-    pub vertices: Vec<[f32; 4]>,
+    pub meshes: Vec<(usize, PieceId)>,
     pub at: usize,
     pub allocate: Option<usize>,
 }

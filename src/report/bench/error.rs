@@ -125,7 +125,7 @@ impl<'a> Bench<'a> {
     /// Whether every measured frame shows what the first shows: one camera, and a scene that
     /// stands (or is held). Sampling such frames again would draw the same masks.
     pub(super) fn path_is_still(&self) -> bool {
-        self.settings.path.len() == 1 && !self.scene_moves()
+        self.settings.is_still(&self.scene)
     }
 
     /// Whether the measured frames pose the scene at their own times and something in it

@@ -107,6 +107,10 @@ impl Bench<'_> {
             let camera = settings.camera(scene, i);
             for k in 0..timed.len() {
                 let j = (k + i) % timed.len();
+                let ms: f64 = frames[j].iter().map(|t| t.ms).sum();
+                if settings.enough(scene, frames[j].len(), ms) {
+                    continue;
+                }
                 frames[j].push(time_frame(&mut renderers[j], scene, &camera, &timed[j].1)?);
             }
         }

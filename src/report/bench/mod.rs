@@ -40,6 +40,10 @@ use stats::{frame_ratios, median, stats};
 /// Frames timed pass by pass for each configuration's breakdown (after its measured frames).
 pub const PASS_FRAMES: usize = 3;
 
+/// `enough_seconds` where `tune` and `reproduce` set it: a frame of 1.5 s or more is measured
+/// once, one of 0.5 s or less three times.
+pub const ENOUGH_SECONDS: f64 = 1.5;
+
 /// How frames are taken.
 #[derive(Debug, Clone)]
 pub struct BenchSettings {
@@ -67,9 +71,30 @@ pub struct BenchSettings {
     /// the configurations are then timed a group at a time (each with its baseline), the
     /// renderers of one group dropped before the next is made. None: all at once.
     pub memory_mb: Option<f32>,
+    /// On a still path (one pose, nothing moving): a configuration's measured frames stop
+    /// once they add up to this many seconds (one frame at least), and its pipelined and
+    /// per-pass frames are as many. A frame that takes seconds is its own long sample (the
+    /// scheduling noise the median of several guards against is milliseconds); frames of
+    /// tens of milliseconds are all taken. None: always `frames`.
+    pub enough_seconds: Option<f64>,
 }
 
 impl BenchSettings {
+    /// Whether every measured frame is the same frame: one camera pose, and the scene standing
+    /// (motion off, or nothing in it moves).
+    fn is_still(&self, scene: &Scene) -> bool {
+        self.path.len() == 1 && !(self.motion && !scene.motion.is_still())
+    }
+
+    /// Whether `taken` frames adding up to `ms` are enough of a configuration's measured
+    /// frames (`frames`, or fewer on a still path past `enough_seconds`).
+    fn enough(&self, scene: &Scene, taken: usize, ms: f64) -> bool {
+        taken >= self.frames.max(1)
+            || (taken > 0
+                && self.is_still(scene)
+                && self.enough_seconds.is_some_and(|s| ms >= s * 1e3))
+    }
+
     /// Poses `scene` for frame `i` of the path, at `i / FRAME_RATE_HZ` seconds; without
     /// `motion` it stays as loaded.
     fn pose(&self, scene: &mut Scene, i: usize) {
@@ -497,8 +522,9 @@ fn pipelined_ms(
     scene: &mut Scene,
     settings: &BenchSettings,
     options: &Options,
+    frames: usize,
 ) -> Result<f64, RenderError> {
-    let frames = settings.frames.max(1);
+    let frames = frames.max(1);
     let start = Instant::now();
     let mut in_flight: Option<crate::gl::syncs::Fence> = None;
     for i in 0..frames {
@@ -536,7 +562,7 @@ fn pass_breakdown(
         submit_ms: timed.iter().map(|t| t.submit_ms).collect(),
         own_ms: timed.iter().map(|t| t.own_ms).collect(),
         pipelined_ms: if settings.pipelined {
-            pipelined_ms(renderer, scene, settings, options)?
+            pipelined_ms(renderer, scene, settings, options, timed.len())?
         } else {
             0.0
         },
@@ -547,7 +573,7 @@ fn pass_breakdown(
         prepared: Prepared::default(),
     };
     let frames = if settings.breakdown {
-        settings.frames.clamp(1, PASS_FRAMES)
+        timed.len().clamp(1, PASS_FRAMES)
     } else {
         0
     };
@@ -632,11 +658,17 @@ impl<'a> Bench<'a> {
             self.renderer
                 .render_at(scene, &camera, options, FrameRequest::default())?;
         }
-        let mut timed = Vec::new();
-        for i in 0..settings.frames.max(1) {
+        let mut timed: Vec<Timed> = Vec::new();
+        let mut ms = 0.0;
+        for i in 0.. {
+            if settings.enough(scene, i, ms) {
+                break;
+            }
             settings.pose(scene, i);
             let camera = settings.camera(scene, i);
-            timed.push(time_frame(self.renderer, scene, &camera, options)?);
+            let t = time_frame(self.renderer, scene, &camera, options)?;
+            ms += t.ms;
+            timed.push(t);
         }
         let mut m = pass_breakdown(self.renderer, scene, settings, options, &timed)?;
         m.prepared = prepared;

@@ -27,6 +27,10 @@ pub struct Lab<'a> {
     pub quick: bool,
     /// Measured frames per configuration (`Settings::frames`).
     pub frames: usize,
+    /// Unmeasured frames before each configuration (`Settings::warmup`).
+    warmup: usize,
+    /// `Settings::enough_seconds`: fewer frames for configurations that take seconds.
+    pub enough_seconds: Option<f64>,
     out: &'a Path,
     bar: &'a ProgressBar,
     rows: Vec<BenchRow>,
@@ -58,6 +62,7 @@ impl<'a> Lab<'a> {
                 motion: false,
                 sample_every: 1,
                 memory_mb: None,
+                enough_seconds: settings.enough_seconds,
             },
         );
         Lab {
@@ -69,6 +74,8 @@ impl<'a> Lab<'a> {
             fixed: super::PAPER_FRAME.to_vec(),
             quick: settings.quick,
             frames: settings.frames,
+            warmup: settings.warmup,
+            enough_seconds: settings.enough_seconds,
             out,
             bar,
             rows: Vec::new(),
@@ -195,12 +202,17 @@ impl<'a> Lab<'a> {
         s
     }
 
-    /// `shadowlab bench` with this scene, fixed assignments and one sweep.
+    /// `shadowlab bench` with this scene, fixed assignments and one sweep, measured as the
+    /// lab measures: the still camera, the scene standing, one configuration after another.
     pub fn bench_command(&self, sets: &[&str], sweep: &str) -> String {
         let mut s = format!(
-            "shadowlab bench --scene {} --size {}x{}",
-            self.scene_file, self.base.width, self.base.height
+            "shadowlab bench --scene {} --size {}x{} --path still --no-motion --sequential \
+             --warmup {} --frames {}",
+            self.scene_file, self.base.width, self.base.height, self.warmup, self.frames
         );
+        if let Some(enough) = self.enough_seconds {
+            s.push_str(&format!(" --enough-seconds {enough}"));
+        }
         for a in self.fixed.iter().chain(sets) {
             s.push_str(&format!(" --set {a}"));
         }

@@ -77,6 +77,10 @@ pub struct Settings {
     pub height: u32,
     pub warmup: usize,
     pub frames: usize,
+    /// Configurations whose measured frames add up to this many seconds stop there (one frame
+    /// at least; `BenchSettings::enough_seconds`): the paper's frame on the large maps takes
+    /// seconds a frame. None: every configuration `frames`.
+    pub enough_seconds: Option<f64>,
     /// `KEY=VALUE` settings applied to every configuration (after each scene's `[options]`).
     pub sets: Vec<String>,
     pub progress: bool,
@@ -98,6 +102,7 @@ impl Settings {
             height: 480,
             warmup: 1,
             frames: 3,
+            enough_seconds: Some(crate::report::bench::ENOUGH_SECONDS),
             sets: Vec::new(),
             progress: true,
             keep: None,

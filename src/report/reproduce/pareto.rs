@@ -215,6 +215,7 @@ pub fn frontier(lab: &mut Lab) -> Result<Section, ReproduceError> {
     settings.per_light = false;
     // The finalists as many frames as every other configuration of the report.
     settings.final_frames = lab.frames;
+    settings.enough_seconds = lab.enough_seconds;
     if lab.quick {
         settings.rung_frames = vec![1];
     }
@@ -264,8 +265,9 @@ pub fn frontier(lab: &mut Lab) -> Result<Section, ReproduceError> {
     s.tables.push(t);
     s.regenerate.push(format!(
         "shadowlab tune --scene assets/scenes/{name}.toml --candidates {candidates} --finalists \
-         {finalists} --final-frames {} --no-per-light",
-        settings.final_frames
+         {finalists} --final-frames {} --enough-seconds {} --no-per-light",
+        settings.final_frames,
+        settings.enough_seconds.unwrap_or(0.0)
     ));
     Ok(s)
 }
