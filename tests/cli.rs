@@ -296,9 +296,9 @@ fn bench_under_the_gpu_profile_waits_for_nothing_in_a_timed_frame() {
 
 /// Issue 41: `bench --enough-seconds S` measures one frame of a configuration whose first
 /// takes S seconds or more, on a still camera only, round-robin and `--sequential`: with S
-/// a microsecond every row of the still camera has one frame, every row of a turn (each
-/// frame another pose, so one would stand for the start of the path only) and every row
-/// without the flag all three. Made to fail: with `enough` ignoring the path (moving
+/// a microsecond every row of the still camera has one frame (and no throughput, which needs
+/// a second frame in flight), every row of a turn (each frame another pose, so one would
+/// stand for the start of the path only) and every row without the flag all three. Made to fail: with `enough` ignoring the path (moving
 /// cameras cut too), the turn's rows have one frame.
 #[test]
 fn bench_enough_seconds_cuts_long_frames_on_a_still_camera_only() {
@@ -345,6 +345,9 @@ fn bench_enough_seconds_cuts_long_frames_on_a_still_camera_only() {
                 "{path} {enough:?} sequential={sequential}: {row}"
             );
             assert!(row["frame_ms"]["median"].as_f64().unwrap() > 0.0, "{row}");
+            // Throughput needs a second frame in flight: none beside a single frame.
+            let pipelined = row["pipelined_ms"].as_f64().unwrap();
+            assert_eq!(pipelined > 0.0, frames > 1, "{row}");
         }
     }
     std::fs::remove_dir_all(&dir).ok();

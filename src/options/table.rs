@@ -386,9 +386,11 @@ define_options! {
         /// for later frames while they fit; one whose maps would hold more draws each light's
         /// maps just before its own pass, into textures the lights share, the least recently
         /// drawn given up first, so memory stays within this whatever the lights and sizes
-        /// (on oa_dm3, 51 omni lights of 2048-texel cubes would hold 5 GB). 0: no limit,
-        /// every map first (the paper).
-        budget_mb: f32 = 1024.0, in 0.0 ..= 1048576.0;
+        /// (on oa_dm3, 51 omni lights of 2048-texel cubes would hold 5 GB). The planner's
+        /// frames of the five benchmark scenes hold at most 318 MB (oa_dm3); 512 leaves the
+        /// paper's frame's maps room beside its volumes within 2 GiB. 0: no limit, every map
+        /// first (the paper).
+        budget_mb: f32 = 512.0, in 0.0 ..= 1048576.0;
         /// Hardware compare (sampler2DShadow, LEQUAL) or a compare in the shader.
         compare: Compare = Compare::Hardware;
         /// Compare result in alpha, then the alpha test (paper), or intensity (thesis 2.2.6).
@@ -538,7 +540,9 @@ define_options! {
         /// Memory for kept volume parts, in MiB (each held on the CPU and in the GPU's
         /// buffer): a still light's pieces of still casters are built once against every
         /// receiver in its range and kept while out of view; beyond this the least recently
-        /// planned are dropped.
+        /// planned are dropped. The CPU's copies of the other parts drawn (in the GPU's buffer
+        /// already) are held within as much again, least recently planned dropped first: a
+        /// light whose draws change then builds them again.
         kept_mb: f32 = 256.0, in 0.0 ..= 65536.0;
         /// Whose volumes the GPU extrudes (with infinite extrusion and the shader pipeline;
         /// elsewhere the CPU builds them all). Those volumes are whole caster groups, counted

@@ -307,7 +307,8 @@ impl Planner {
         made
     }
 
-    /// The upload [`Planner::prepare_ahead`] readied for the light was made.
+    /// The upload the light's draws asked for ([`Planner::prepare_ahead`]'s or a frame's) was
+    /// made: the vertices it named may be given up.
     pub fn uploaded(&mut self, light: usize) {
         self.volumes.uploaded(light);
     }

@@ -160,7 +160,11 @@ pub fn bench_table(rows: &[BenchRow]) -> Table {
             format!("{:.2}", r.cpu_ms.median),
             format!("{:.2}", r.cpu_ms.p99),
             format!("{:.2}, {:.2}", r.own_ms.median, r.own_ms.p99),
-            format!("{:.2}", r.pipelined_ms),
+            if r.pipelined_ms > 0.0 {
+                format!("{:.2}", r.pipelined_ms)
+            } else {
+                "–".to_string()
+            },
             format!("{:.1}", r.syncs_per_frame.total),
             format!("{:.2}, {:.2}", r.frame_ms.p95, r.frame_ms.p99),
             format!("{:.2}", r.frame_ms.p99_over_median()),

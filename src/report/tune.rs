@@ -245,9 +245,9 @@ pub struct TuneSettings {
 }
 
 /// `TuneSettings::memory_mb` unless told otherwise: with a renderer's maps within
-/// `shadow_map.budget_mb` (1024 by default) and the scene's images shared, a search of
-/// oa_dm3 then peaks within 2 GiB (docs/reproduce.md, "Memory").
-pub const DEFAULT_MEMORY_MB: f32 = 1024.0;
+/// `shadow_map.budget_mb` (512 by default) and the scene's images shared, aiming at a
+/// search of oa_dm3 within 2 GiB (docs/reproduce.md, "Memory", says what it reached).
+pub const DEFAULT_MEMORY_MB: f32 = 512.0;
 
 impl TuneSettings {
     /// A search of `candidates` configurations along `path`.

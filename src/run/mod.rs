@@ -396,7 +396,10 @@ fn volume_draws(
         let v = planner.volume_draws(scene, plan, lp, options)?;
         planner_ms += planning.elapsed().as_secs_f64() * 1e3;
         match f.upload_volumes(lp, v, groups.as_deref()) {
-            Ok(ms) => builds_ms += ms,
+            Ok(ms) => {
+                builds_ms += ms;
+                planner.uploaded(lp.light);
+            }
             Err(e) => {
                 planner.forget_volume_draws(lp.light);
                 return Err(e);

@@ -68,7 +68,8 @@ impl VolumePlanner {
             .sum()
     }
 
-    /// The light's upload was made: its vertices need not be held for it any longer.
+    /// The light's upload was made: its vertices need not be held for it any longer, and the
+    /// CPU copies of its drawn parts may be evicted.
     pub fn uploaded(&mut self, light: usize) {
         if let Some(lv) = self.lights.get_mut(&light) {
             lv.upload = VolumeUpload::default();

@@ -20,6 +20,9 @@ use std::time::Instant;
 /// One sampled frame of a path: its index, the sample, milliseconds of masks and of tracing.
 pub(super) type PathSample = (usize, FrameSample, f64, f64);
 
+/// A configuration's error, with its first frame's sample when one was asked for.
+pub(super) type Errored = (FrameError, Option<PathSample>);
+
 /// What the benches of one scene seen from one first view share: its exact masks, and each
 /// configuration's error on that view (the error frame does not depend on how the frames are
 /// timed), so that `tune`'s rungs and a report's sections draw each error frame once.
@@ -173,6 +176,14 @@ impl<'a> Bench<'a> {
         Ok(out)
     }
 
+    /// Whether [`Bench::error`] of `options` would be taken from the view, drawing nothing.
+    pub(super) fn error_is_known(&self, options: &Options, sample: bool) -> bool {
+        self.view
+            .errors
+            .get(&error_key(options))
+            .is_some_and(|(_, sampled)| sampled.is_some() || !sample)
+    }
+
     /// Error of `options` on the first frame of the path, with that frame's volume stats; with
     /// `sample`, also that frame's masks sampled against the reference (as `sample_path` would
     /// sample its frame 0, without drawing them again).
@@ -180,13 +191,12 @@ impl<'a> Bench<'a> {
         &mut self,
         options: &Options,
         sample: bool,
-    ) -> Result<(FrameError, Option<PathSample>), RenderError> {
-        let key = error_key(options);
-        if let Some((error, sampled)) = self.view.errors.get(&key)
-            && (sampled.is_some() || !sample)
-        {
+    ) -> Result<Errored, RenderError> {
+        if self.error_is_known(options, sample) {
+            let (error, sampled) = &self.view.errors[&error_key(options)];
             return Ok((error.clone(), sampled.clone().filter(|_| sample)));
         }
+        let key = error_key(options);
         // Frusta kept from the path's last frames are sized for another view: the first frame's
         // error is the configuration's own, not its history's.
         self.renderer.forget_kept_frusta();

@@ -30,8 +30,8 @@ mod interleave;
 mod kept;
 mod stats;
 
-use error::FrameError;
 pub use error::{Capture, View};
+use error::{Errored, FrameError};
 pub use kept::Kept;
 
 pub use stats::{Median, MsStats};
@@ -233,7 +233,8 @@ pub struct BenchRow {
     pub prepared: Prepared,
     /// Milliseconds per frame with up to two frames in flight (throughput): the path drawn
     /// again back to back, bench waiting only for the frame before the one just sent (0 where
-    /// `BenchSettings::pipelined` is off).
+    /// `BenchSettings::pipelined` is off, or where one frame was measured: nothing is in
+    /// flight beside a single frame).
     pub pipelined_ms: f64,
     pub shadows_off_frame_ms: Median,
     /// The median frame over the shadows-off median frame.
@@ -561,7 +562,7 @@ fn pass_breakdown(
         frame_ms: timed.iter().map(|t| t.ms).collect(),
         submit_ms: timed.iter().map(|t| t.submit_ms).collect(),
         own_ms: timed.iter().map(|t| t.own_ms).collect(),
-        pipelined_ms: if settings.pipelined {
+        pipelined_ms: if settings.pipelined && timed.len() > 1 {
             pipelined_ms(renderer, scene, settings, options, timed.len())?
         } else {
             0.0
@@ -649,11 +650,31 @@ impl<'a> Bench<'a> {
         &self.scene
     }
 
-    fn measure(&mut self, options: &Options) -> Result<Measured, RenderError> {
+    /// One configuration's frames on this bench's renderer. With `error` (whether to sample
+    /// its masks), its error frame is drawn first, when no earlier bench of the view drew it,
+    /// and stands for one warm-up frame: it is the path's first frame, drawn with masks, on
+    /// the renderer made ready as the warm-up's would be (one cold frame fewer per
+    /// configuration; the paper's frame on oa_dm3 takes 3-40 s).
+    fn measure(
+        &mut self,
+        options: &Options,
+        error: Option<bool>,
+    ) -> Result<(Measured, Option<Errored>), RenderError> {
+        self.settings.pose(&mut self.scene, 0);
+        let prepared = self.renderer.prepare(&self.scene, options)?;
+        let mut warmup = self.settings.warmup;
+        let errored = match error {
+            Some(sample) => {
+                if !self.error_is_known(options, sample) {
+                    warmup = warmup.saturating_sub(1);
+                }
+                Some(self.error(options, sample)?)
+            }
+            None => None,
+        };
         let (scene, settings) = (&mut self.scene, &self.settings);
         settings.pose(scene, 0);
-        let prepared = self.renderer.prepare(scene, options)?;
-        for _ in 0..settings.warmup {
+        for _ in 0..warmup {
             let camera = settings.camera(scene, 0);
             self.renderer
                 .render_at(scene, &camera, options, FrameRequest::default())?;
@@ -675,7 +696,7 @@ impl<'a> Bench<'a> {
         // The next configuration starts from the scene alone, not beside this one's maps
         // and volumes (a sweep's memory is then its largest configuration's, not their sum).
         self.renderer.release_kept();
-        Ok(m)
+        Ok((m, errored))
     }
 
     /// `options` with shadows off. The techniques' own groups are reset too: they do nothing
@@ -702,19 +723,21 @@ impl<'a> Bench<'a> {
             return Ok(ms.clone());
         }
         let off = Self::shadows_off(options);
-        let ms = self.measure(&off)?.frame_ms;
+        let ms = self.measure(&off, None)?.0.frame_ms;
         self.baselines.insert(key, ms.clone());
         Ok(ms)
     }
 
     /// A configuration's timed frames, and its shadows-off frames' times by path frame: from
-    /// the round-robin timing, or measured now. A configuration without shadows is its own
+    /// the round-robin timing, or measured now (then with its error, `sample` saying whether
+    /// its masks are sampled: [`Bench::measure`]). A configuration without shadows is its own
     /// baseline.
     fn timed(
         &mut self,
         c: &BenchConfig,
         interleaved: &HashMap<String, Measured>,
-    ) -> Result<(Vec<f64>, Measured), RenderError> {
+        sample: bool,
+    ) -> Result<(Vec<f64>, Measured, Option<Errored>), RenderError> {
         let own = c.options.technique == Technique::None;
         if self.settings.interleave {
             let m = interleaved[&options_key(&c.options)].clone();
@@ -725,15 +748,16 @@ impl<'a> Bench<'a> {
                     .frame_ms
                     .clone()
             };
-            Ok((off, m))
+            Ok((off, m, None))
         } else if own {
-            let m = self.measure(&c.options)?;
+            let (m, errored) = self.measure(&c.options, Some(sample))?;
             let key = Self::baseline_key(&c.options);
             self.baselines.insert(key, m.frame_ms.clone());
-            Ok((m.frame_ms.clone(), m))
+            Ok((m.frame_ms.clone(), m, errored))
         } else {
             let off = self.baseline(&c.options)?;
-            Ok((off, self.measure(&c.options)?))
+            let (m, errored) = self.measure(&c.options, Some(sample))?;
+            Ok((off, m, errored))
         }
     }
 
@@ -800,14 +824,14 @@ impl<'a> Bench<'a> {
         };
         for (c, key) in configs.iter().zip(keys) {
             bar.set_message(c.label());
-            let (off, m) = self.timed(c, &interleaved)?;
-            let off_ms = median(&mut off.clone());
-            let ratios = stats(&frame_ratios(&m.frame_ms, &off));
-            let cpu_ms = stats(&m.submit_ms);
             let sample = c.options.technique != Technique::None && c.options.estimate.samples > 0;
             // On a still path every measured frame is the error frame again: its masks,
             // sampled once, stand for all of them.
             let still = sample && self.path_is_still();
+            let (off, m, errored) = self.timed(c, &interleaved, still)?;
+            let off_ms = median(&mut off.clone());
+            let ratios = stats(&frame_ratios(&m.frame_ms, &off));
+            let cpu_ms = stats(&m.submit_ms);
             let (
                 FrameError {
                     total,
@@ -818,7 +842,10 @@ impl<'a> Bench<'a> {
                     fallbacks,
                 },
                 first_sample,
-            ) = self.error(&c.options, still)?;
+            ) = match errored {
+                Some(errored) => errored,
+                None => self.error(&c.options, still)?,
+            };
             let frame_ms = stats(&m.frame_ms);
             let sampled = if sample {
                 let frames = match first_sample {
