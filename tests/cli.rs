@@ -294,12 +294,33 @@ fn bench_under_the_gpu_profile_waits_for_nothing_in_a_timed_frame() {
     std::fs::remove_dir_all(&dir).ok();
 }
 
+/// `bench --sweep technique=none,shadow_map` in `dir`, unsampled, at `size` with `frames`
+/// measured and `warmup` frames before each.
+fn bench_off_and_maps(dir: &Path, size: &str, frames: &str, warmup: &str) -> Command {
+    let mut c = shadowlab();
+    c.current_dir(dir).args([
+        "bench",
+        "--sweep",
+        "technique=none,shadow_map",
+        "--size",
+        size,
+        "--set",
+        "estimate.samples=0",
+        "--frames",
+        frames,
+        "--warmup",
+        warmup,
+    ]);
+    c
+}
+
 /// Issue 41: `bench --enough-seconds S` measures one frame of a configuration whose first
 /// takes S seconds or more, on a still camera only, round-robin and `--sequential`: with S
 /// a microsecond every row of the still camera has one frame (and no throughput, which needs
 /// a second frame in flight), every row of a turn (each frame another pose, so one would
-/// stand for the start of the path only) and every row without the flag all three. Made to fail: with `enough` ignoring the path (moving
-/// cameras cut too), the turn's rows have one frame.
+/// stand for the start of the path only) and every row without the flag all three. Made to
+/// fail: with `enough` ignoring the path (moving cameras cut too), the turn's rows have one
+/// frame.
 #[test]
 fn bench_enough_seconds_cuts_long_frames_on_a_still_camera_only() {
     let dir = temp("bench-enough");
@@ -312,22 +333,8 @@ fn bench_enough_seconds_cuts_long_frames_on_a_still_camera_only() {
     ];
     for (k, (path, enough, sequential, frames)) in cases.into_iter().enumerate() {
         let json = dir.join(format!("r{k}.json"));
-        let mut c = shadowlab();
-        c.current_dir(&dir).args([
-            "bench",
-            "--sweep",
-            "technique=none,shadow_map",
-            "--size",
-            "160x120",
-            "--set",
-            "estimate.samples=0",
-            "--frames",
-            "3",
-            "--warmup",
-            "0",
-            "--path",
-            path,
-        ]);
+        let mut c = bench_off_and_maps(&dir, "160x120", "3", "0");
+        c.args(["--path", path]);
         if let Some(s) = enough {
             c.args(["--enough-seconds", s]);
         }
@@ -365,20 +372,7 @@ fn bench_gives_cpu_ms_and_frame_by_frame_ratios_to_shadows_off() {
     let dir = temp("bench-ratios");
     for sequential in [false, true] {
         let json = dir.join(format!("r{sequential}.json"));
-        let mut c = shadowlab();
-        c.current_dir(&dir).args([
-            "bench",
-            "--sweep",
-            "technique=none,shadow_map",
-            "--size",
-            "320x240",
-            "--set",
-            "estimate.samples=0",
-            "--frames",
-            "5",
-            "--warmup",
-            "1",
-        ]);
+        let mut c = bench_off_and_maps(&dir, "320x240", "5", "1");
         if sequential {
             c.arg("--sequential");
         }

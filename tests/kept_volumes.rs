@@ -99,14 +99,7 @@ fn under_the_gpu_profile_the_masks_equal_those_of_a_renderer_with_every_cache_of
         "height=240",
         "plan.profile=gpu",
     ]);
-    let mut fresh = cached.clone();
-    // Kept parts are built as the first frame of a renderer builds them: the reference's.
-    for set in [
-        "plan.reuse_volume_draws=false",
-        "shadow_volume.caching=false",
-    ] {
-        fresh.set_assignment(set).unwrap();
-    }
+    let fresh = caches_off(&cached);
     let (_ctx, mut first_sight) = common::gl_on(shadowlab::options::BackendChoice::Egl, &cached);
     let mut b = first_sight.sibling(cached.width, cached.height).unwrap();
     // Kept parts built on first sight, and built ahead (`Renderer::prepare`).
@@ -119,6 +112,19 @@ fn under_the_gpu_profile_the_masks_equal_those_of_a_renderer_with_every_cache_of
     for a in [&mut first_sight, &mut ahead] {
         masks_along_the_walk(a, &mut b, &mut scene, &keys, (&cached, &fresh));
     }
+}
+
+/// `options` with the volume caches off: kept parts are built as the first frame of a renderer
+/// builds them, the reference's.
+fn caches_off(options: &Options) -> Options {
+    let mut fresh = options.clone();
+    for set in [
+        "plan.reuse_volume_draws=false",
+        "shadow_volume.caching=false",
+    ] {
+        fresh.set_assignment(set).unwrap();
+    }
+    fresh
 }
 
 /// Compares `a`'s masks with `b`'s, which forgets everything before each frame, along the
@@ -181,5 +187,56 @@ fn under_auto_a_still_frame_draws_its_volumes_again() {
             "light {}: drawn anew ({:?})",
             v.light, last.plan_stats.choices
         );
+    }
+}
+
+/// Issue 41: with `shadow_volume.kept_mb` far below one light's volumes, the planner gives up
+/// its CPU copies of parts once they are uploaded (and kept parts past the budget), and the
+/// masks along the walk (players running, one light circling, layouts changing) stay those of
+/// a renderer with every cache off: a part given up is built again when a layout needs it.
+/// After the first frame it holds fewer parts than a renderer with the default budget, on the
+/// paper's frame and with the planner. Made to fail: with `evict_copies` doing nothing, the
+/// paper's frame holds as many parts under either budget.
+#[test]
+fn with_little_volume_memory_parts_are_given_up_and_the_masks_hold() {
+    let (mut scene, _, _) = load_scene_file("oa_dm1");
+    let keys = oa_dm1_path();
+    for planner in ["plan.enabled=false", "plan.enabled=true"] {
+        let roomy = options_with(&[
+            "technique=shadow_volume",
+            "width=320",
+            "height=240",
+            planner,
+        ]);
+        let mut tight = roomy.clone();
+        tight.set_assignment("shadow_volume.kept_mb=0.001").unwrap();
+        let fresh = caches_off(&tight);
+        let (_ctx, mut a) = common::gl_on(shadowlab::options::BackendChoice::Egl, &tight);
+        let mut b = a.sibling(tight.width, tight.height).unwrap();
+        let mut c = a.sibling(tight.width, tight.height).unwrap();
+        a.load_scene(&scene).unwrap();
+        c.load_scene(&scene).unwrap();
+        let mut compared = 0;
+        for i in (0..3).chain((6..60).step_by(9)) {
+            scene.pose_at(i as f64 / FRAME_RATE_HZ);
+            let camera = keys[i].apply(&scene.camera);
+            let (_, n) = common::cached_against_fresh(
+                (&mut a, &mut b),
+                (&scene, &camera),
+                (&tight, &fresh),
+                &format!("{planner}, frame {i}"),
+            );
+            compared += n;
+            if i == 0 {
+                c.render_at(&scene, &camera, &roomy, FrameRequest::default())
+                    .unwrap();
+                let (held, roomy_held) = (a.held().volume_parts, c.held().volume_parts);
+                assert!(
+                    held < roomy_held,
+                    "{planner}: {held} parts held within 0.001 MiB, {roomy_held} within 256"
+                );
+            }
+        }
+        assert!(compared >= 8, "{planner}: {compared} masks compared");
     }
 }

@@ -615,30 +615,7 @@ impl VolumePlanner {
 
     /// Kept parts past `budget` vertices, least recently planned first.
     fn evict_kept(&mut self, budget: usize) {
-        let kept_parts = || {
-            self.lights.iter().flat_map(|(&light, lv)| {
-                lv.meshes
-                    .iter()
-                    .filter(|(_, c)| c.kept)
-                    .map(move |(&id, c)| (c.used, light, id, c.mesh.vertices.len()))
-            })
-        };
-        // Within the budget (every frame but those that fill it) nothing is listed or sorted.
-        let mut held: usize = kept_parts().map(|k| k.3).sum();
-        if held <= budget {
-            return;
-        }
-        let mut kept: Vec<(u64, usize, (usize, PieceId), usize)> = kept_parts().collect();
-        kept.sort_unstable_by_key(|k| (k.0, k.1, k.2));
-        for (used, light, id, vertices) in kept {
-            if held <= budget || used >= self.clock {
-                break;
-            }
-            if let Some(lv) = self.lights.get_mut(&light) {
-                lv.meshes.remove(&id);
-                held -= vertices;
-            }
-        }
+        self.evict_where(budget, |_, c| c.kept);
     }
 
     /// Unkept parts past `budget` vertices, least recently planned first, among lights whose
@@ -647,22 +624,30 @@ impl VolumePlanner {
     /// them again. Without it the paper's frame held every light's volumes twice (oa_dm3:
     /// 764 MB here beside 645 MB in the buffers).
     fn evict_copies(&mut self, budget: usize) {
-        let copies = || {
-            self.lights
-                .iter()
-                .filter(|(_, lv)| lv.upload.meshes.is_none())
-                .flat_map(|(&light, lv)| {
-                    lv.meshes
-                        .iter()
-                        .filter(|(_, c)| !c.kept)
-                        .map(move |(&id, c)| (c.used, light, id, c.mesh.vertices.len()))
-                })
+        self.evict_where(budget, |lv, c| !c.kept && lv.upload.meshes.is_none());
+    }
+
+    /// The parts `counted` picks, least recently planned first, dropped until those it picks
+    /// hold at most `budget` vertices; parts planned by the latest prepare stay.
+    fn evict_where(
+        &mut self,
+        budget: usize,
+        counted: impl Fn(&LightVolumeDraws, &CachedPart) -> bool,
+    ) {
+        let parts = || {
+            self.lights.iter().flat_map(|(&light, lv)| {
+                lv.meshes
+                    .iter()
+                    .filter(|(_, c)| counted(lv, c))
+                    .map(move |(&id, c)| (c.used, light, id, c.mesh.vertices.len()))
+            })
         };
-        let mut held: usize = copies().map(|k| k.3).sum();
+        // Within the budget (every frame but those that fill it) nothing is listed or sorted.
+        let mut held: usize = parts().map(|k| k.3).sum();
         if held <= budget {
             return;
         }
-        let mut listed: Vec<(u64, usize, (usize, PieceId), usize)> = copies().collect();
+        let mut listed: Vec<(u64, usize, (usize, PieceId), usize)> = parts().collect();
         listed.sort_unstable_by_key(|k| (k.0, k.1, k.2));
         for (used, light, id, vertices) in listed {
             if held <= budget || used >= self.clock {

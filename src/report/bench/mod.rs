@@ -83,7 +83,7 @@ impl BenchSettings {
     /// Whether every measured frame is the same frame: one camera pose, and the scene standing
     /// (motion off, or nothing in it moves).
     fn is_still(&self, scene: &Scene) -> bool {
-        self.path.len() == 1 && !(self.motion && !scene.motion.is_still())
+        self.path.len() == 1 && (!self.motion || scene.motion.is_still())
     }
 
     /// Whether `taken` frames adding up to `ms` are enough of a configuration's measured
@@ -256,7 +256,9 @@ pub struct BenchRow {
     /// What the planner decided for the error frame (lights and casters culled, scissor,
     /// counting, `auto`'s choices).
     pub plan: PlanStats,
-    /// What the error frame reused from the frames before it.
+    /// What the error frame reused from what was made before it (one after another: the
+    /// configuration's first frame, after `Renderer::prepare`; round-robin: drawn after the
+    /// timing, on the bench's own renderer).
     pub cache: CacheStats,
     /// What the measured frames redid and reused, per frame on average.
     pub redone: Redone,
