@@ -5,6 +5,7 @@
 use crate::frame::Syncs;
 use glow::HasContext;
 use std::cell::Cell;
+use std::collections::VecDeque;
 
 /// One kind of wait.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -74,8 +75,65 @@ impl Fence {
                 break;
             }
         }
+        self.delete(gl);
+    }
+
+    /// Deletes the fence without waiting for it.
+    pub fn delete(self, gl: &glow::Context) {
         // SAFETY: no one else holds the fence.
         unsafe { gl.delete_sync(self.0) };
+    }
+}
+
+/// A bound on the lights' passes the GL holds queued (`Plan::lights_per_fence`): the lights
+/// are sent in groups of `group`, a fence after each, and before a group is sent past the
+/// next the one before it is waited for (counted), so that at most two groups are queued.
+/// A CPU rasteriser bins what it is sent ahead of its threads, and a frame of many lights
+/// binned whole held gigabytes (docs/reproduce.md). Groups rather than single lights: each
+/// fence flushes, and a flush per light cost a frame of 64 small lit passes a quarter more on
+/// llvmpipe. 0 never waits.
+pub struct LightQueue<'gl> {
+    gl: &'gl glow::Context,
+    group: u32,
+    sent: u32,
+    fences: VecDeque<Fence>,
+}
+
+impl<'gl> LightQueue<'gl> {
+    pub fn new(gl: &'gl glow::Context, group: u32) -> LightQueue<'gl> {
+        LightQueue {
+            gl,
+            group,
+            sent: 0,
+            fences: VecDeque::new(),
+        }
+    }
+
+    /// A light's passes were sent: at the end of a group, a fence, and a wait until the group
+    /// before the last has run.
+    pub fn light_sent(&mut self) -> Result<(), String> {
+        if self.group == 0 {
+            return Ok(());
+        }
+        self.sent += 1;
+        if !self.sent.is_multiple_of(self.group) {
+            return Ok(());
+        }
+        self.fences.push_back(Fence::insert(self.gl)?);
+        while self.fences.len() > 1 {
+            if let Some(oldest) = self.fences.pop_front() {
+                oldest.wait(self.gl);
+            }
+        }
+        Ok(())
+    }
+}
+
+impl Drop for LightQueue<'_> {
+    fn drop(&mut self) {
+        for f in self.fences.drain(..) {
+            f.delete(self.gl);
+        }
     }
 }
 

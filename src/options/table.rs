@@ -574,6 +574,15 @@ define_options! {
         /// `depth_clamp`, `separate_stencil`, `stencil_wrap`, `timer_query`; `shadowlab info`
         /// lists them), so that each fallback can be run anywhere.
         disable: String = String::new();
+        /// Lights the frame sends between two fences: after every this many lights' passes
+        /// (and maps, when they come first) it inserts a fence and waits for the one before
+        /// (`glClientWaitSync`), so the GL holds at most two such groups queued. A CPU
+        /// rasteriser bins what it is sent ahead of its threads: oa_dm3's paper's frame of
+        /// 64 lights' shadow maps held 2.8 GB binned unbounded, 1.2 GB with 8 (a fence flushes,
+        /// and one per light cost its shadows-off frame a quarter more). 0: never waits.
+        /// Under `plan.profile = gpu` 0: a GPU's driver bounds its own queue, and a wait there
+        /// would stall its pipeline.
+        lights_per_fence: u32 = 8, in 0 ..= 1024;
     }
 
     /// Loading Quake 3 maps and models (applied when a scene is loaded).

@@ -10,6 +10,7 @@
 //! | `plan.depth_bounds_test` | on | on | the GL's own test reads no depth back |
 //! | `plan.keep_volumes` (still lights' pieces built against their range, kept) | off | on | longer, unmerged volumes: more fill, less CPU (docs/motion.md) |
 //! | `shadow_volume.gpu_extrusion = auto` | `none` | `moving` | a vertex shader on llvmpipe runs on the CPU too |
+//! | `gl.lights_per_fence` (a fence and a wait every few lights) | as set | 0 | a CPU rasteriser's queue grows with the frame; a GPU driver bounds its own |
 //!
 //! Every other decision costs CPU work only and is the same under both.
 
@@ -32,6 +33,7 @@ pub fn resolve(mut o: Options, software_renderer: bool) -> Options {
     if gpu {
         o.plan.occlusion = false;
         o.plan.depth_clip = false;
+        o.gl.lights_per_fence = 0;
     } else {
         o.plan.keep_volumes = false;
     }
@@ -60,6 +62,7 @@ mod tests {
         assert_eq!(gpu.plan.profile, Profile::Gpu);
         assert!(!gpu.plan.occlusion && !gpu.plan.depth_clip && gpu.plan.depth_bounds_test);
         assert!(gpu.plan.keep_volumes);
+        assert_eq!((soft.gl.lights_per_fence, gpu.gl.lights_per_fence), (8, 0));
         assert_eq!(gpu.shadow_volume.gpu_extrusion, GpuExtrusion::Moving);
         let mut forced = o.clone();
         forced.plan.profile = Profile::Gpu;

@@ -55,6 +55,7 @@ impl<'a> FrameRun<'a> {
                 }
                 go_on!(self.step(StepKind::Lit, Some(lp), None, Self::color_image));
             }
+            self.queue.light_sent().map_err(RenderError::Gl)?;
         }
         if plan.maps_per_light {
             self.finish_maps();

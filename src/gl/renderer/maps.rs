@@ -18,6 +18,7 @@ impl<'a> FrameRun<'a> {
         for (pi, lp) in plan.lights.iter().enumerate() {
             if lp.technique.uses_maps() {
                 maps.extend(go_on!(self.light_maps(pi)));
+                self.queue.light_sent().map_err(RenderError::Gl)?;
             }
         }
         self.finish_maps();

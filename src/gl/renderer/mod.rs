@@ -467,6 +467,7 @@ impl Drawer {
             volume_stats: Vec::new(),
             own_ms: 0.0,
             fixed: self.fixed.as_ref().filter(|_| settings.fixed_function),
+            queue: syncs::LightQueue::new(gl, plan.lights_per_fence),
         })
     }
 
@@ -704,6 +705,8 @@ pub(crate) struct FrameRun<'a> {
     own_ms: f64,
     /// The legacy pipeline, when the frame draws with it.
     fixed: Option<&'a FixedFunction>,
+    /// The bound on lights queued in the GL (`Plan::lights_per_fence`).
+    queue: syncs::LightQueue<'a>,
 }
 
 impl<'a> FrameRun<'a> {

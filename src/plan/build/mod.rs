@@ -121,6 +121,7 @@ impl Plan {
             stencil,
             culled,
             maps_per_light: false,
+            lights_per_fence: options.gl.lights_per_fence,
             stats,
         };
         let (per_light, bytes) = super::map_memory::maps_per_light(&plan, &options.shadow_map);
