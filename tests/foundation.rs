@@ -306,7 +306,15 @@ fn lights_per_fence_bounds_the_queue_on_software_only_and_changes_no_pixel() {
         frame_only: true,
         ..Default::default()
     };
-    for (technique, waits) in [("technique=shadow_volume", 1), ("technique=shadow_map", 3)] {
+    // softpipe's shadow-map frames change with where the driver is flushed at all (a frame
+    // timed pass by pass, with a glFinish between passes, differs from the same frame untimed
+    // by ~2 800 bytes here, fences or not); llvmpipe's do not. The pixels are compared where
+    // every driver keeps them: on volumes.
+    let cases = [
+        ("technique=shadow_volume", 1, true),
+        ("technique=shadow_map", 3, false),
+    ];
+    for (technique, waits, compare_pixels) in cases {
         let one = with(&[technique, "gl.lights_per_fence=1"]);
         let f = r.render_with(&scene, &one, left).unwrap();
         assert_eq!(f.plan_stats.lights_planned, 2, "{technique}");
@@ -320,11 +328,7 @@ fn lights_per_fence_bounds_the_queue_on_software_only_and_changes_no_pixel() {
         assert_eq!(r.render_with(&scene, &none, left).unwrap().syncs.total(), 0);
         let gpu = with(&[technique, "gl.lights_per_fence=1", "plan.profile=gpu"]);
         assert_eq!(r.render_with(&scene, &gpu, left).unwrap().syncs.total(), 0);
-        if technique != "technique=shadow_volume" {
-            // softpipe's shadow-map frames change with where the driver is flushed at all (a
-            // frame timed pass by pass, with a glFinish between passes, differs from the same
-            // frame untimed by ~2 800 bytes here, fences or not); llvmpipe's do not. The
-            // pixels are compared where every driver keeps them.
+        if !compare_pixels {
             continue;
         }
         let bounded = r.render_with(&scene, &one, pixels).unwrap().image;

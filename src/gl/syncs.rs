@@ -5,7 +5,6 @@
 use crate::frame::Syncs;
 use glow::HasContext;
 use std::cell::Cell;
-use std::collections::VecDeque;
 
 /// One kind of wait.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -96,7 +95,8 @@ pub struct LightQueue<'gl> {
     gl: &'gl glow::Context,
     group: u32,
     sent: u32,
-    fences: VecDeque<Fence>,
+    /// The fence after the last group sent, not yet waited for.
+    last: Option<Fence>,
 }
 
 impl<'gl> LightQueue<'gl> {
@@ -105,7 +105,7 @@ impl<'gl> LightQueue<'gl> {
             gl,
             group,
             sent: 0,
-            fences: VecDeque::new(),
+            last: None,
         }
     }
 
@@ -119,11 +119,8 @@ impl<'gl> LightQueue<'gl> {
         if !self.sent.is_multiple_of(self.group) {
             return Ok(());
         }
-        self.fences.push_back(Fence::insert(self.gl)?);
-        while self.fences.len() > 1 {
-            if let Some(oldest) = self.fences.pop_front() {
-                oldest.wait(self.gl);
-            }
+        if let Some(before) = self.last.replace(Fence::insert(self.gl)?) {
+            before.wait(self.gl);
         }
         Ok(())
     }
@@ -131,7 +128,7 @@ impl<'gl> LightQueue<'gl> {
 
 impl Drop for LightQueue<'_> {
     fn drop(&mut self) {
-        for f in self.fences.drain(..) {
+        if let Some(f) = self.last.take() {
             f.delete(self.gl);
         }
     }
