@@ -50,6 +50,7 @@ fn main() {
     env_logger::Builder::from_env(env_logger::Env::default().default_filter_or("warn"))
         .format_timestamp(None)
         .init();
+    commands::allocator::return_large_blocks();
     let cli = Cli::parse();
     let result: Result<()> = match cli.command {
         Command::Info(a) => commands::info::run(&cli.common, &a),

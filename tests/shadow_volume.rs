@@ -457,3 +457,52 @@ fn the_alpha_tested_grate_is_beyond_geometric_volumes() {
             <= on_alpha.false_shadow + on_alpha.receiver_mismatch + 50
     );
 }
+
+#[test]
+fn a_volume_lights_mask_reads_its_counts_before_its_lit_pass_marks_the_stencil() {
+    // A volume light's mask is drawn within the frame, between its counting and its lit pass
+    // (which marks the stencil where it adds light, `lighting.light_once`): on every receiver
+    // pixel it must say shadowed exactly where the light's stencil count, read back at that
+    // point, is not zero. Each counting and each light, the built-in scene with every surface
+    // taken as one whose triangles overlap, so that the lit pass marks wherever it adds light.
+    let mut scene = builtin::default_scene();
+    for s in &mut scene.surfaces {
+        s.overlapping = true;
+    }
+    let mut m = Measurer::new(scene.clone(), &options_with(&[SV]));
+    for counting in ["zfail", "zpass"] {
+        let o = options_with(&[SV, &format!("shadow_volume.counting={counting}")]);
+        for light in 0..scene.lights.len() {
+            let frame = m
+                .renderer()
+                .render_with(
+                    &scene,
+                    &o,
+                    shadowlab::gl::FrameRequest {
+                        masks: true,
+                        stencil_of: Some(light),
+                        ..shadowlab::gl::FrameRequest::default()
+                    },
+                )
+                .unwrap_or_else(|e| panic!("{e}"));
+            let counts = frame.stencil.as_ref().expect("the stencil asked for");
+            let mask = frame.masks.iter().find(|k| k.light == light).unwrap();
+            let (mut receivers, mut shadowed, mut wrong) = (0, 0, 0);
+            for (&decision, &count) in mask.values.iter().zip(&counts.values) {
+                if decision == MaskValue::NotReceiver as u8 {
+                    continue;
+                }
+                receivers += 1;
+                let says_shadowed = decision == MaskValue::Shadowed as u8;
+                shadowed += says_shadowed as usize;
+                wrong += (says_shadowed != (count != 0)) as usize;
+            }
+            println!("{counting} light {light}: {shadowed} of {receivers} receiver px shadowed");
+            assert!(
+                receivers > 1000 && shadowed > 100,
+                "{counting} light {light}"
+            );
+            assert_eq!(wrong, 0, "{counting} light {light}: mask against stencil");
+        }
+    }
+}

@@ -1,5 +1,6 @@
 //! Subcommands and what they share: option assembly, scene loading, context creation.
 
+pub mod allocator;
 pub mod bench;
 pub mod check;
 pub mod flythrough;

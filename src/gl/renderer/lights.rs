@@ -54,6 +54,17 @@ impl<'a> FrameRun<'a> {
                     ),
                 }
                 go_on!(self.step(StepKind::Lit, Some(lp), None, Self::color_image));
+                if self.mask_in_frame(lp) {
+                    self.mask_now(lp, |run| {
+                        draw_maps(
+                            &run.ctx,
+                            lp,
+                            &run.bindings(maps, pi),
+                            |v| run.lit_program(v),
+                            (MapPass::Mask, false),
+                        )
+                    });
+                }
             }
             self.queue.light_sent().map_err(RenderError::Gl)?;
         }
@@ -150,6 +161,9 @@ impl<'a> FrameRun<'a> {
         let wraps = self.counts_wrap();
         go_on!(self.stencil_step(StepKind::Stencil, lp, wraps));
         let stencil = self.requested_stencil(lp, wraps);
+        if self.mask_in_frame(lp) {
+            self.mask_now(lp, |run| run.mask_over_stencil(lp));
+        }
         go_on!(self.lit_over_stencil(lp, !fill));
         if fill {
             self.timer.begin(gl, PassId::light(lp.light, Stage::Fill));
@@ -181,6 +195,9 @@ impl<'a> FrameRun<'a> {
         self.mark_fragments(f, !counted);
         go_on!(self.stencil_step(StepKind::Fragments, lp, wraps));
         let stencil = self.requested_stencil(lp, wraps);
+        if self.mask_in_frame(lp) {
+            self.mask_now(lp, |run| run.mask_over_stencil(lp));
+        }
         go_on!(self.lit_over_stencil(lp, true));
         Ok(ControlFlow::Continue(stencil))
     }

@@ -18,7 +18,12 @@ impl<'a> FrameRun<'a> {
         passes::gbuffer::draw(&self.ctx, &self.programs.gbuffer);
         let gbuffer = read_gbuffer(gl, gtarget);
         let mut masks = Vec::with_capacity(plan.lights.len() + plan.culled.len());
+        let mut drawn = std::mem::take(&mut self.masks_in_frame);
         for (pi, lp) in plan.lights.iter().enumerate() {
+            if let Some(i) = drawn.iter().position(|m| m.light == lp.light) {
+                masks.push(drawn.swap_remove(i));
+                continue;
+            }
             let own;
             let maps = if plan.maps_per_light && lp.technique.uses_maps() {
                 own = self.maps_again(pi);
@@ -27,14 +32,7 @@ impl<'a> FrameRun<'a> {
                 maps
             };
             mtarget.bind(gl);
-            set_scissor(gl, None);
-            // SAFETY: clears the mask to "not a receiver"; depth and stencil untouched.
-            unsafe {
-                gl.color_mask(true, true, true, true);
-                gl.clear_color(0.0, 0.0, 0.0, 0.0);
-                gl.clear(glow::COLOR_BUFFER_BIT);
-            }
-            set_scissor(gl, lp.scissor);
+            clear_mask(gl, lp.scissor);
             if let Some(ff) = self.fixed {
                 self.fixed_mask(ff, lp, &self.bindings(maps, pi));
                 set_scissor(gl, None);
@@ -97,6 +95,50 @@ impl<'a> FrameRun<'a> {
         }
         masks.sort_by_key(|m| m.light);
         (Some(gbuffer), masks, hybrid_stats)
+    }
+
+    /// Whether light `lp`'s mask is drawn within the frame, right after the work it reads
+    /// (its volumes' or fragments' stencil before its lit pass marks it, or its maps drawn
+    /// just before its pass, before a later light takes their textures over), rather than
+    /// after the frame, which would do that work again. Hybrid lights and the legacy pipeline
+    /// draw theirs after the frame.
+    pub(super) fn mask_in_frame(&self, lp: &LightPlan) -> bool {
+        let redone_after = self.volumes_of(lp).is_some()
+            || self.fragments_of(lp).is_some()
+            || (self.ctx.plan.maps_per_light && lp.technique.uses_maps());
+        self.request.masks
+            && self.measure_targets.is_some()
+            && self.fixed.is_none()
+            && lp.technique != Technique::Hybrid
+            && redone_after
+    }
+
+    /// Light `lp`'s mask drawn now by `draw` into the mask target (over the frame's depth and
+    /// stencil as they stand), read back and kept for the frame's end; untimed (its time is
+    /// left out of the frame's), and the frame's own target bound again.
+    pub(super) fn mask_now(&mut self, lp: &LightPlan, draw: impl FnOnce(&Self)) {
+        let gl = self.ctx.gl;
+        let Some((_, mtarget)) = self.measure_targets else {
+            return;
+        };
+        self.timer.end(gl);
+        // The frame's work so far finishes on the frame's clock: the read-back below would
+        // wait for it, and the mask's time is the mask's alone.
+        syncs::finish(gl);
+        let start = Instant::now();
+        mtarget.bind(gl);
+        clear_mask(gl, lp.scissor);
+        draw(self);
+        set_scissor(gl, None);
+        self.masks_in_frame.push(Mask {
+            light: lp.light,
+            width: mtarget.width,
+            height: mtarget.height,
+            values: mtarget.read(gl),
+        });
+        self.target.bind(gl);
+        set_scissor(gl, lp.scissor);
+        self.masks_in_frame_ms += start.elapsed().as_secs_f64() * 1e3;
     }
 
     /// Light `pi`'s maps for its mask when each light's were drawn before its pass: drawn
@@ -198,6 +240,18 @@ impl FrameRun<'_> {
             None => fixed_maps(&self.ctx, ff, lp, bindings, true),
         }
     }
+}
+
+/// Clears the bound mask to "not a receiver" and scissors to `scissor` for the light's mask.
+fn clear_mask(gl: &glow::Context, scissor: Option<Scissor>) {
+    set_scissor(gl, None);
+    // SAFETY: clears the mask's colour; depth and stencil untouched.
+    unsafe {
+        gl.color_mask(true, true, true, true);
+        gl.clear_color(0.0, 0.0, 0.0, 0.0);
+        gl.clear(glow::COLOR_BUFFER_BIT);
+    }
+    set_scissor(gl, scissor);
 }
 
 pub(super) fn keep_reached(values: &mut [u8], gbuffer: &GBuffer, light: &crate::scene::Light) {

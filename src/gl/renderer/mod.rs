@@ -91,7 +91,9 @@ pub enum RenderError {
 /// What a frame should produce besides its image and timings.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
 pub struct FrameRequest {
-    /// The G-buffer and each light's decision mask (drawn after the timed frame).
+    /// The G-buffer and each light's decision mask, untimed: a light whose mask reads work the
+    /// frame would otherwise do again (its counted stencil, maps drawn just before its pass)
+    /// gets it drawn right after that work, the others after the frame.
     pub masks: bool,
     /// Stop after this step (walkthrough): the frame then holds the steps so far and the
     /// buffer the step wrote as `step_image`.
@@ -468,6 +470,8 @@ impl Drawer {
             own_ms: 0.0,
             fixed: self.fixed.as_ref().filter(|_| settings.fixed_function),
             queue: syncs::LightQueue::new(gl, plan.lights_per_fence),
+            masks_in_frame: Vec::new(),
+            masks_in_frame_ms: 0.0,
         })
     }
 
@@ -707,6 +711,11 @@ pub(crate) struct FrameRun<'a> {
     fixed: Option<&'a FixedFunction>,
     /// The bound on lights queued in the GL (`Plan::lights_per_fence`).
     queue: syncs::LightQueue<'a>,
+    /// Masks drawn within the frame, right after the work they read (`mask_in_frame`).
+    masks_in_frame: Vec<Mask>,
+    /// Milliseconds those took (with the waits of their read-backs), left out of the
+    /// frame's time: masks are untimed.
+    masks_in_frame_ms: f64,
 }
 
 impl<'a> FrameRun<'a> {
@@ -729,7 +738,7 @@ impl<'a> FrameRun<'a> {
         if completed {
             syncs::finish(gl);
         }
-        let frame_ms = self.start.elapsed().as_secs_f64() * 1e3;
+        let frame_ms = self.start.elapsed().as_secs_f64() * 1e3 - self.masks_in_frame_ms;
         let surface_draws = passes::surface_draws().wrapping_sub(self.draws_before);
         self.overlays();
         if completed {

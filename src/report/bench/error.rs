@@ -96,7 +96,8 @@ impl<'a> Bench<'a> {
         Ok(self.capture_timed(options)?.0)
     }
 
-    /// [`Bench::capture`], with the milliseconds its masks took after the frame.
+    /// [`Bench::capture`], with the milliseconds its masks took (the frame's time leaves them
+    /// out).
     fn capture_timed(&mut self, options: &Options) -> Result<(Capture, f64), RenderError> {
         // The exact masks kept are those of the first frame, posed at its time.
         self.settings.pose(&mut self.scene, 0);
@@ -131,12 +132,6 @@ impl<'a> Bench<'a> {
         self.settings.is_still(&self.scene)
     }
 
-    /// Whether the measured frames pose the scene at their own times and something in it
-    /// moves.
-    fn scene_moves(&self) -> bool {
-        self.settings.motion && !self.scene.motion.is_still()
-    }
-
     /// Every measured frame of the path with `options`, its masks drawn (untimed) and sampled:
     /// the error along the path and, per frame, milliseconds of masks and of tracing.
     pub(super) fn sample_path(
@@ -144,7 +139,7 @@ impl<'a> Bench<'a> {
         options: &Options,
     ) -> Result<Vec<PathSample>, RenderError> {
         let mut out = Vec::with_capacity(self.settings.frames);
-        let moving = self.scene_moves();
+        let moving = self.settings.scene_moves(&self.scene);
         for i in (0..self.settings.frames.max(1)).step_by(self.settings.sample_every.max(1)) {
             self.settings.pose(&mut self.scene, i);
             let camera = self.settings.camera(&self.scene, i);

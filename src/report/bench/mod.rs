@@ -83,7 +83,12 @@ impl BenchSettings {
     /// Whether every measured frame is the same frame: one camera pose, and the scene standing
     /// (motion off, or nothing in it moves).
     fn is_still(&self, scene: &Scene) -> bool {
-        self.path.len() == 1 && (!self.motion || scene.motion.is_still())
+        self.path.len() == 1 && !self.scene_moves(scene)
+    }
+
+    /// Whether the measured frames pose `scene` at their own times and something in it moves.
+    fn scene_moves(&self, scene: &Scene) -> bool {
+        self.motion && !scene.motion.is_still()
     }
 
     /// Whether `taken` frames adding up to `ms` are enough of a configuration's measured
@@ -292,7 +297,8 @@ pub struct SampledPath {
     /// Median and largest per-frame error (fractions).
     pub median: f64,
     pub max: f64,
-    /// Median milliseconds per frame to draw and read the G-buffer and masks (after the frame).
+    /// Median milliseconds per frame to draw and read the G-buffer and masks (untimed: within
+    /// the frame where a mask reads work the frame did, after it otherwise).
     pub masks_ms: f64,
     /// Median milliseconds per frame to trace the samples (rayon, every core).
     pub trace_ms: f64,
@@ -675,6 +681,7 @@ impl<'a> Bench<'a> {
             None => None,
         };
         let (scene, settings) = (&mut self.scene, &self.settings);
+        // Sampling the path posed the scene at later frames.
         settings.pose(scene, 0);
         for _ in 0..warmup {
             let camera = settings.camera(scene, 0);
