@@ -240,3 +240,41 @@ fn with_little_volume_memory_parts_are_given_up_and_the_masks_hold() {
         assert!(compared >= 8, "{planner}: {compared} masks compared");
     }
 }
+
+/// Issue 41: on the paper's frame a still camera builds nothing after its first frame, though
+/// its CPU copies of parts were given up (`shadow_volume.kept_mb` far below the volumes):
+/// `shadow_volume.caching` keeps each light's draws whole while nothing they are made from
+/// changed, and the masks stay those of a renderer with every cache off. Made to fail: with
+/// the draws laid out again every frame (as before), the second frame built every part again.
+#[test]
+fn a_still_paper_frame_builds_no_volume_again_after_giving_up_its_copies() {
+    let (scene, _, _) = load_scene_file("oa_dm1");
+    let tight = options_with(&[
+        "technique=shadow_volume",
+        "width=320",
+        "height=240",
+        "plan.enabled=false",
+        "shadow_volume.kept_mb=0.001",
+    ]);
+    let fresh = caches_off(&tight);
+    let (_ctx, mut a) = common::gl_on(shadowlab::options::BackendChoice::Egl, &tight);
+    let mut b = a.sibling(tight.width, tight.height).unwrap();
+    a.load_scene(&scene).unwrap();
+    let camera = scene.camera;
+    let (first, _) =
+        common::cached_against_fresh((&mut a, &mut b), (&scene, &camera), (&tight, &fresh), "1");
+    let built: usize = first.volumes.iter().map(|v| v.parts_built).sum();
+    assert!(built > 100, "the first frame built {built} parts");
+    let (second, compared) =
+        common::cached_against_fresh((&mut a, &mut b), (&scene, &camera), (&tight, &fresh), "2");
+    assert_eq!(compared, scene.lights.len());
+    for v in &second.volumes {
+        assert_eq!(v.parts_built, 0, "light {}: built again ({v:?})", v.light);
+        assert!(v.draws_reused, "light {}: laid out again ({v:?})", v.light);
+    }
+    assert!(
+        second.volumes.len() >= 2,
+        "{} volume lights",
+        second.volumes.len()
+    );
+}

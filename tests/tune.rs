@@ -87,3 +87,31 @@ fn the_frontier_is_what_tune_measured_and_its_errors_are_the_frames() {
         pick.label
     );
 }
+
+/// A configuration whose frames stopped at `enough_seconds` in one rung is not measured
+/// again in the next (it would take as many frames of the same still view): with a bound
+/// every frame passes, the second rung carries every configuration it ranks; without one,
+/// none. Made to fail: with nothing carried, the second rung measured all 4 again.
+#[test]
+fn a_rung_carries_the_rows_that_stopped_at_enough_seconds() {
+    let scene = builtin::default_scene();
+    let base = options_with(&["width=160", "height=120", "estimate.samples=0"]);
+    let mut m = Measurer::new(scene.clone(), &base);
+    let path = vec![PathKey::of(&scene.camera)];
+    for (enough, carried) in [(Some(1e-9), 4), (None, 0)] {
+        let mut settings = TuneSettings::new(8, path.clone());
+        settings.rung_frames = vec![2, 3];
+        settings.finalists = 2;
+        settings.final_frames = 2;
+        settings.per_light = false;
+        settings.enough_seconds = enough;
+        let hidden = ProgressBar::hidden();
+        let result = tune(m.renderer(), &scene, &base, &settings, &hidden).unwrap();
+        let second = &result.rungs[1];
+        assert_eq!(second.stage, "halving");
+        assert_eq!(second.configurations, 4, "{:?}", result.rungs);
+        assert_eq!(second.carried, carried, "{enough:?}: {:?}", result.rungs);
+        assert_eq!(result.rungs[0].carried, 0);
+        assert_eq!(result.rows.len(), 2);
+    }
+}

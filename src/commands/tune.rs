@@ -197,8 +197,13 @@ pub fn run(common: &CommonArgs, args: &Args) -> Result<()> {
             } else {
                 format!("{} kept", r.kept)
             };
+            let carried = if r.carried > 0 {
+                format!(", {} carried from the rung before", r.carried)
+            } else {
+                String::new()
+            };
             format!(
-                "{}: {} configurations × {} frames → {outcome} ({:.0} s)",
+                "{}: {} configurations × {} frames{carried} → {outcome} ({:.0} s)",
                 r.stage, r.configurations, r.frames, r.seconds
             )
         })

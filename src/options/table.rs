@@ -386,10 +386,11 @@ define_options! {
         /// for later frames while they fit; one whose maps would hold more draws each light's
         /// maps just before its own pass, into textures the lights share, the least recently
         /// drawn given up first, so memory stays within this whatever the lights and sizes
-        /// (on oa_dm3, 51 omni lights of 2048-texel cubes would hold 5 GB). The planner's
-        /// frames of the five benchmark scenes hold at most 318 MB (oa_dm3); 512 leaves the
-        /// paper's frame's maps room beside its volumes within 2 GiB. 0: no limit, every map
-        /// first (the paper).
+        /// (on oa_dm3, 51 omni lights of 2048-texel cubes would hold 5 GB). A paper's frame
+        /// (`plan.enabled = false`) whose lights also hold volume buffers (hybrid) draws its
+        /// maps per light whenever a budget is set: it keeps no map for a later frame, so that
+        /// costs no draw more. The planner's frames of the five benchmark scenes hold at most
+        /// 318 MB (oa_dm3). 0: no limit, every map first (the paper).
         budget_mb: f32 = 512.0, in 0.0 ..= 1048576.0;
         /// Hardware compare (sampler2DShadow, LEQUAL) or a compare in the shader.
         compare: Compare = Compare::Hardware;
@@ -535,7 +536,9 @@ define_options! {
         facing_epsilon: f32 = 0.0, in 0.0 ..= 1.0;
         /// Additive lit pass where stencil = 0 (paper) or Bestimt and Freitag's fill quad.
         shading: VolumeShading = VolumeShading::Additive;
-        /// Rebuild a light's volumes only when the light or a caster moved.
+        /// Rebuild a light's volumes only when the light or a caster moved. On the paper's
+        /// frame (`plan.enabled = false`) it also keeps a light's draws whole while nothing
+        /// they are made from changed (what `plan.reuse_volume_draws` does for the planner).
         caching: bool = true;
         /// Memory for kept volume parts, in MiB (each held on the CPU and in the GPU's
         /// buffer): a still light's pieces of still casters are built once against every

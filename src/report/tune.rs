@@ -276,6 +276,10 @@ pub struct Rung {
     pub frames: usize,
     /// Configurations kept for the next stage (per light: lights answered).
     pub kept: usize,
+    /// Configurations whose row the rung before stands for, not measured again: their frames
+    /// stopped short of that rung's at `enough_seconds`, so this rung would take as many
+    /// frames of the same still view.
+    pub carried: usize,
     pub seconds: f64,
 }
 
@@ -412,19 +416,25 @@ struct Stage {
     breakdown: bool,
 }
 
-/// Measures `configs` for one stage; the stage's record says how many it kept as all of them
+/// Measures `configs` for one stage, but for those `carried` holds a row of (one entry per
+/// configuration, or none at all); the stage's record says how many it kept as all of them
 /// (the caller sets it where it keeps fewer).
 fn measure_stage(
     renderer: &mut Renderer,
     scene: &Scene,
     settings: &TuneSettings,
-    configs: &[BenchConfig],
+    (configs, carried): (&[BenchConfig], &[Option<BenchRow>]),
     stage: Stage,
     bar: &ProgressBar,
     kept: &mut Kept,
 ) -> Result<(Vec<BenchRow>, Rung), RenderError> {
     let start = Instant::now();
-    bar.set_length(configs.len() as u64);
+    let is_carried = |i: usize| carried.get(i).is_some_and(Option::is_some);
+    let todo: Vec<BenchConfig> = (0..configs.len())
+        .filter(|&i| !is_carried(i))
+        .map(|i| configs[i].clone())
+        .collect();
+    bar.set_length(todo.len() as u64);
     bar.set_position(0);
     bar.set_prefix(stage.prefix);
     let bench = BenchSettings {
@@ -443,17 +453,38 @@ fn measure_stage(
         enough_seconds: settings.enough_seconds,
     };
     let mut bench = Bench::new(renderer, scene, bench).with_kept(std::mem::take(kept));
-    let rows = bench.run_with(configs, bar);
+    let measured = bench.run_with(&todo, bar);
     *kept = bench.take_kept();
-    let rows = rows?;
+    let rows = fill_gaps(carried, configs.len(), measured?);
     let rung = Rung {
         stage: stage.name,
         configurations: configs.len(),
         frames: stage.frames,
         kept: configs.len(),
+        carried: configs.len() - todo.len(),
         seconds: start.elapsed().as_secs_f64(),
     };
     Ok((rows, rung))
+}
+
+/// The rows of `count` configurations: each carried row where `carried` has one, the next of
+/// `measured` (in order) elsewhere.
+fn fill_gaps(carried: &[Option<BenchRow>], count: usize, measured: Vec<BenchRow>) -> Vec<BenchRow> {
+    let mut measured = measured.into_iter();
+    (0..count)
+        .filter_map(|i| match carried.get(i) {
+            Some(Some(row)) => Some(row.clone()),
+            _ => measured.next(),
+        })
+        .collect()
+}
+
+/// Of `rows` (measured over `frames` frames each), those whose frames stopped short at
+/// `enough_seconds`, for the configurations `kept` (their indices) in the next rung.
+fn carry(rows: &[BenchRow], frames: usize, kept: &[usize]) -> Vec<Option<BenchRow>> {
+    kept.iter()
+        .map(|&i| rows.get(i).filter(|r| r.frames < frames).cloned())
+        .collect()
 }
 
 /// Runs the search on `scene` over `base`.
@@ -485,6 +516,7 @@ pub fn tune_keeping(
     base.estimate.samples = 0;
     let mut configs = candidates(&base, &space(), settings.candidates, settings.seed)?;
     let mut rungs = Vec::new();
+    let mut carried = Vec::new();
     for (k, &frames) in settings.rung_frames.iter().enumerate() {
         if configs.len() <= settings.finalists {
             break;
@@ -497,13 +529,21 @@ pub fn tune_keeping(
             interleave: false,
             breakdown: false,
         };
-        let (rows, mut rung) =
-            measure_stage(renderer, scene, settings, &configs, stage, bar, kept)?;
+        let (rows, mut rung) = measure_stage(
+            renderer,
+            scene,
+            settings,
+            (&configs, &carried),
+            stage,
+            bar,
+            kept,
+        )?;
         let points: Vec<(f64, f64)> = rows.iter().map(point).collect();
         let last = k + 1 == settings.rung_frames.len();
         let kept = survivors(&points, last, settings.finalists);
         rung.kept = kept.len();
         rungs.push(rung);
+        carried = carry(&rows, frames, &kept);
         configs = kept.into_iter().map(|i| configs[i].clone()).collect();
     }
     if configs.len() > settings.finalists {
@@ -520,7 +560,7 @@ pub fn tune_keeping(
         interleave: true,
         breakdown: true,
     };
-    let (rows, rung) = measure_stage(renderer, scene, settings, &configs, stage, bar, kept)?;
+    let (rows, rung) = measure_stage(renderer, scene, settings, (&configs, &[]), stage, bar, kept)?;
     rungs.push(rung);
     let ranks = pareto_ranks(&rows.iter().map(point).collect::<Vec<_>>());
     let per_light = if settings.per_light {
@@ -534,7 +574,7 @@ pub fn tune_keeping(
             breakdown: true,
         };
         let (light_rows, mut rung) =
-            measure_stage(renderer, scene, settings, &configs, stage, bar, kept)?;
+            measure_stage(renderer, scene, settings, (&configs, &[]), stage, bar, kept)?;
         let choices = per_light_choices(&light_rows, settings.accuracy / 100.0);
         rung.kept = choices.len();
         rungs.push(rung);

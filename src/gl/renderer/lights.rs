@@ -55,7 +55,7 @@ impl<'a> FrameRun<'a> {
                 }
                 go_on!(self.step(StepKind::Lit, Some(lp), None, Self::color_image));
                 if self.mask_in_frame(lp) {
-                    self.mask_now(lp, |run| {
+                    self.mask_now(lp, |run, _| {
                         draw_maps(
                             &run.ctx,
                             lp,
@@ -145,6 +145,9 @@ impl<'a> FrameRun<'a> {
             (MapPass::Lit, true),
         );
         go_on!(self.step(StepKind::Lit, Some(lp), None, Self::color_image));
+        if self.mask_in_frame(lp) {
+            self.hybrid_mask_now(pi, maps);
+        }
         Ok(ControlFlow::Continue(stencil))
     }
 
@@ -162,7 +165,7 @@ impl<'a> FrameRun<'a> {
         go_on!(self.stencil_step(StepKind::Stencil, lp, wraps));
         let stencil = self.requested_stencil(lp, wraps);
         if self.mask_in_frame(lp) {
-            self.mask_now(lp, |run| run.mask_over_stencil(lp));
+            self.mask_now(lp, |run, _| run.mask_over_stencil(lp));
         }
         go_on!(self.lit_over_stencil(lp, !fill));
         if fill {
@@ -196,7 +199,7 @@ impl<'a> FrameRun<'a> {
         go_on!(self.stencil_step(StepKind::Fragments, lp, wraps));
         let stencil = self.requested_stencil(lp, wraps);
         if self.mask_in_frame(lp) {
-            self.mask_now(lp, |run| run.mask_over_stencil(lp));
+            self.mask_now(lp, |run, _| run.mask_over_stencil(lp));
         }
         go_on!(self.lit_over_stencil(lp, true));
         Ok(ControlFlow::Continue(stencil))

@@ -13,7 +13,7 @@ impl<'a> FrameRun<'a> {
         let Some((gtarget, mtarget)) = self.measure_targets.filter(|_| self.request.masks) else {
             return (None, Vec::new(), Vec::new());
         };
-        let mut hybrid_stats = Vec::new();
+        let mut hybrid_stats = std::mem::take(&mut self.hybrid_in_frame);
         gtarget_bind(gl, gtarget);
         passes::gbuffer::draw(&self.ctx, &self.programs.gbuffer);
         let gbuffer = read_gbuffer(gl, gtarget);
@@ -98,29 +98,28 @@ impl<'a> FrameRun<'a> {
     }
 
     /// Whether light `lp`'s mask is drawn within the frame, right after the work it reads
-    /// (its volumes' or fragments' stencil before its lit pass marks it, or its maps drawn
-    /// just before its pass, before a later light takes their textures over), rather than
-    /// after the frame, which would do that work again. Hybrid lights and the legacy pipeline
-    /// draw theirs after the frame.
+    /// (its volumes' or fragments' stencil before its lit pass marks it, a hybrid light's
+    /// maps and volumes after its pass, or its maps drawn just before its pass, before a
+    /// later light takes their textures over), rather than after the frame, which would do
+    /// that work again. The legacy pipeline draws its masks after the frame.
     pub(super) fn mask_in_frame(&self, lp: &LightPlan) -> bool {
         let redone_after = self.volumes_of(lp).is_some()
             || self.fragments_of(lp).is_some()
             || (self.ctx.plan.maps_per_light && lp.technique.uses_maps());
-        self.request.masks
-            && self.measure_targets.is_some()
-            && self.fixed.is_none()
-            && lp.technique != Technique::Hybrid
-            && redone_after
+        self.request.masks && self.measure_targets.is_some() && self.fixed.is_none() && redone_after
     }
 
     /// Light `lp`'s mask drawn now by `draw` into the mask target (over the frame's depth and
     /// stencil as they stand), read back and kept for the frame's end; untimed (its time is
-    /// left out of the frame's), and the frame's own target bound again.
-    pub(super) fn mask_now(&mut self, lp: &LightPlan, draw: impl FnOnce(&Self)) {
+    /// left out of the frame's), and the frame's own target bound again. Returns what `draw`
+    /// returned (None without a mask target).
+    pub(super) fn mask_now<T>(
+        &mut self,
+        lp: &LightPlan,
+        draw: impl FnOnce(&Self, &MaskTarget) -> T,
+    ) -> Option<T> {
         let gl = self.ctx.gl;
-        let Some((_, mtarget)) = self.measure_targets else {
-            return;
-        };
+        let (_, mtarget) = self.measure_targets?;
         self.timer.end(gl);
         // The frame's work so far finishes on the frame's clock: the read-back below would
         // wait for it, and the mask's time is the mask's alone.
@@ -128,7 +127,7 @@ impl<'a> FrameRun<'a> {
         let start = Instant::now();
         mtarget.bind(gl);
         clear_mask(gl, lp.scissor);
-        draw(self);
+        let drawn = draw(self, mtarget);
         set_scissor(gl, None);
         self.masks_in_frame.push(Mask {
             light: lp.light,
@@ -139,6 +138,24 @@ impl<'a> FrameRun<'a> {
         self.target.bind(gl);
         set_scissor(gl, lp.scissor);
         self.masks_in_frame_ms += start.elapsed().as_secs_f64() * 1e3;
+        Some(drawn)
+    }
+
+    /// Hybrid light `pi`'s mask within the frame, after its lit pass (the mask draws its
+    /// maps' marks and volumes' counts again into the stencil, which the next light clears),
+    /// with its stats.
+    pub(super) fn hybrid_mask_now(&mut self, pi: usize, maps: &[ViewMap]) {
+        let plan = self.ctx.plan;
+        let lp = &plan.lights[pi];
+        let drawn = self.mask_now(lp, |run, mtarget| {
+            let v = run.volumes_of(lp)?;
+            Some(run.hybrid_mask(pi, maps, &v, mtarget))
+        });
+        if let (Some(Some((stencil, fragments))), Some(mask)) = (drawn, self.masks_in_frame.last())
+        {
+            let stats = hybrid_stats_of(lp.light, &mask.values, &stencil, fragments);
+            self.hybrid_in_frame.push(stats);
+        }
     }
 
     /// Light `pi`'s maps for its mask when each light's were drawn before its pass: drawn

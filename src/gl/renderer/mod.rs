@@ -471,6 +471,7 @@ impl Drawer {
             fixed: self.fixed.as_ref().filter(|_| settings.fixed_function),
             queue: syncs::LightQueue::new(gl, plan.lights_per_fence),
             masks_in_frame: Vec::new(),
+            hybrid_in_frame: Vec::new(),
             masks_in_frame_ms: 0.0,
         })
     }
@@ -713,6 +714,8 @@ pub(crate) struct FrameRun<'a> {
     queue: syncs::LightQueue<'a>,
     /// Masks drawn within the frame, right after the work they read (`mask_in_frame`).
     masks_in_frame: Vec<Mask>,
+    /// The hybrid lights' stats from their masks drawn within the frame.
+    hybrid_in_frame: Vec<HybridStats>,
     /// Milliseconds those took (with the waits of their read-backs), left out of the
     /// frame's time: masks are untimed.
     masks_in_frame_ms: f64,

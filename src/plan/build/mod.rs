@@ -124,7 +124,9 @@ impl Plan {
             lights_per_fence: options.gl.lights_per_fence,
             stats,
         };
-        let (per_light, bytes) = super::map_memory::maps_per_light(&plan, &options.shadow_map);
+        // The paper's frame draws every map each frame (no `plan.cache_maps`).
+        let (per_light, bytes) =
+            super::map_memory::maps_per_light(&plan, &options.shadow_map, !p.enabled);
         plan.maps_per_light = per_light;
         plan.stats.maps_per_light = per_light;
         plan.stats.map_bytes = bytes;

@@ -311,8 +311,8 @@ pub struct PieceChoices<'a> {
     /// `plan.reuse_depth_fits`: fits are kept for the next frame (used while its depth is the
     /// same, see [`VolumePlanner::begin_frame`]).
     pub reuse_fits: bool,
-    /// `plan.reuse_volume_draws`: a light's draws are kept, and drawn again while nothing they
-    /// are made from changed.
+    /// `plan.reuse_volume_draws` (`shadow_volume.caching` on the paper's frame): a light's
+    /// draws are kept, and drawn again while nothing they are made from changed.
     pub reuse_draws: bool,
     /// `plan.keep_volumes`: a still light's pieces of still groups are built against its
     /// range and kept (see [`Piece::kept`]).
