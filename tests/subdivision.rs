@@ -374,3 +374,49 @@ fn a_running_model_costs_volumes_not_a_new_subdivision() {
         assert!(cut > by_volumes, "models cut too: {cut} renewed");
     }
 }
+
+/// On the paper's frame (no planner) a subdivided light's world volumes for models are still
+/// only the pieces whose shadow may meet a model (`subdivision.models = volumes`): far fewer
+/// parts than the volumes' paper's frame draws, and the frame errs as little as those volumes
+/// outside the band. Made to fail: with every world piece kept on the paper's frame (as
+/// before: oa_dm3's frame held 1.76 GB), the subdivision drew as many parts as the volumes.
+#[test]
+fn on_the_papers_frame_only_world_pieces_that_reach_a_model_get_volumes() {
+    // model_in_shadow's world is a floor and the awning over Sarge: both may reach him.
+    for (scene, at, fewer) in [
+        (load_scene_file("oa_dm1").0, 0.5, true),
+        (load_asset("assets/hard/model_in_shadow.toml").0, 0.6, false),
+    ] {
+        let o = |t: &str| {
+            options_with(&[
+                &format!("technique={t}"),
+                "plan.enabled=false",
+                "width=320",
+                "height=240",
+            ])
+        };
+        let mut m = Measurer::new(scene.clone(), &o("subdivision"));
+        m.pose(at);
+        let [sub, sv] = ["subdivision", "shadow_volume"].map(|t| m.measure(&o(t)));
+        let parts =
+            |x: &common::Measured| -> usize { x.frame.volumes.iter().map(|v| v.parts_drawn).sum() };
+        let [e, e_sv] = [&sub, &sv].map(|x| x.total.rates().total_excl_boundary);
+        println!(
+            "{}: parts {} against the volumes' {}; outside the band {:.4}%, volumes {:.4}%",
+            scene.name,
+            parts(&sub),
+            parts(&sv),
+            100.0 * e,
+            100.0 * e_sv
+        );
+        assert!(parts(&sub) > 0, "{}: the models cast", scene.name);
+        assert!(
+            !fewer || parts(&sub) * 2 < parts(&sv),
+            "{}: {} parts against the volumes' {}",
+            scene.name,
+            parts(&sub),
+            parts(&sv)
+        );
+        assert!(e <= e_sv + 1e-4, "{}", scene.name);
+    }
+}

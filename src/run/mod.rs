@@ -156,6 +156,7 @@ impl Renderer {
     pub fn release_kept(&mut self) {
         self.drawer.release_kept();
         self.planner.forget();
+        give_back_freed_pages();
     }
 
     /// Uploads a scene, replacing the previous one; what the planner kept belongs to the old.
@@ -409,4 +410,17 @@ fn volume_draws(
     let ms = start.elapsed().as_secs_f64() * 1e3 - builds_ms;
     f.record_cpu(PassId::frame(Stage::VolumePieces), ms.max(0.0));
     Ok(planner_ms)
+}
+
+/// Hands the pages of freed memory back to the system. glibc keeps freed chunks in its heap,
+/// and gives back only its top unless asked: a run measuring one configuration after another
+/// then holds, beside the next configuration's frames, pages an earlier one freed (oa_dm3's
+/// paper's frame of shadow maps, volumes, TSM, hybrid and subdivision one after another:
+/// 2.12 GB peak resident without, 2.05 GB with). Elsewhere than glibc this does nothing.
+fn give_back_freed_pages() {
+    // SAFETY: malloc_trim only returns free pages of the allocator's arenas to the system.
+    #[cfg(all(target_os = "linux", target_env = "gnu"))]
+    unsafe {
+        libc::malloc_trim(0);
+    }
 }
