@@ -416,7 +416,7 @@ fn volume_draws(
 /// and gives back only its top unless asked: a run measuring one configuration after another
 /// then holds, beside the next configuration's frames, pages an earlier one freed (oa_dm3's
 /// paper's frame of shadow maps, volumes, TSM, hybrid and subdivision one after another:
-/// 2.12 GB peak resident without, 2.05 GB with). Elsewhere than glibc this does nothing.
+/// 2.02 GiB peak resident without, 1.96 GiB with). Elsewhere than glibc this does nothing.
 fn give_back_freed_pages() {
     // SAFETY: malloc_trim only returns free pages of the allocator's arenas to the system.
     #[cfg(all(target_os = "linux", target_env = "gnu"))]

@@ -76,7 +76,7 @@ impl FrameFacts<'_> {
                 // only where its shadow may meet a model, as `subdivision.models = volumes`
                 // defines them: the subdivision decides the world's pixels. On the paper's
                 // frame of oa_dm3 every world piece of every light was built and uploaded
-                // beside the fragments (1.76 GB for the frame).
+                // beside the fragments (1.68 GiB peak resident for the frame).
                 false if world_for_models => {
                     cull::sphere_meets_aabb(l.position, l.radius, &bounds) && {
                         let shadow = cull::shadow_bounds(&bounds, l.position, l.radius);
