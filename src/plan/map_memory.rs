@@ -76,13 +76,13 @@ pub fn budget_bytes(o: &ShadowMapOptions) -> Option<u64> {
 
 /// Whether the frame draws each light's maps just before its own pass: its maps together
 /// hold more than the budget, or (with a budget set) they would be held beside its lights'
-/// volume buffers on the paper's frame (`held_each_frame`: nothing keeps its maps for a later
+/// volume buffers on the paper's frame (`drawn_each_frame`: nothing keeps its maps for a later
 /// frame, so drawing each light's before its pass costs no draw more). A paper's-frame hybrid
 /// on oa_dm3 held 384 MB of maps beside 645 MB of volume buffers. Bytes of the frame's maps
 /// together beside it.
-pub fn maps_per_light(plan: &Plan, o: &ShadowMapOptions, held_each_frame: bool) -> (bool, u64) {
+pub fn maps_per_light(plan: &Plan, o: &ShadowMapOptions, drawn_each_frame: bool) -> (bool, u64) {
     let bytes: u64 = plan.lights.iter().map(|lp| light_map_bytes(lp, o)).sum();
-    let beside_volumes = held_each_frame && bytes > 0 && plan.any_volumes();
+    let beside_volumes = drawn_each_frame && bytes > 0 && plan.any_volumes();
     (
         budget_bytes(o).is_some_and(|b| bytes > b || beside_volumes),
         bytes,

@@ -13,7 +13,7 @@ impl<'a> FrameRun<'a> {
         let Some((gtarget, mtarget)) = self.measure_targets.filter(|_| self.request.masks) else {
             return (None, Vec::new(), Vec::new());
         };
-        let mut hybrid_stats = std::mem::take(&mut self.hybrid_in_frame);
+        let hybrid_stats = std::mem::take(&mut self.hybrid_in_frame);
         gtarget_bind(gl, gtarget);
         passes::gbuffer::draw(&self.ctx, &self.programs.gbuffer);
         let gbuffer = read_gbuffer(gl, gtarget);
@@ -46,36 +46,15 @@ impl<'a> FrameRun<'a> {
                 });
                 continue;
             }
-            match self.volumes_of(lp) {
-                Some(v) if lp.technique == Technique::Hybrid => {
-                    let (stencil, fragments) = self.hybrid_mask(pi, maps, &v, mtarget);
-                    set_scissor(gl, None);
-                    let values = mtarget.read(gl);
-                    hybrid_stats.push(hybrid_stats_of(lp.light, &values, &stencil, fragments));
-                    masks.push(Mask {
-                        light: lp.light,
-                        width: mtarget.width,
-                        height: mtarget.height,
-                        values,
-                    });
-                    continue;
-                }
-                _ if let Some(f) = self.fragments_of(lp) => {
-                    self.subdivision_stencil(lp, &f);
-                    self.mask_over_stencil(lp);
-                }
-                Some(_) => {
-                    self.count_volumes(lp);
-                    self.mask_over_stencil(lp);
-                }
-                None => draw_maps(
-                    &self.ctx,
-                    lp,
-                    &self.bindings(maps, pi),
-                    |v| self.lit_program(v),
-                    (MapPass::Mask, false),
-                ),
-            }
+            // Lights with volumes, fragments or maps drawn per light had theirs drawn within
+            // the frame (`mask_in_frame`): what is left reads maps the frame kept.
+            draw_maps(
+                &self.ctx,
+                lp,
+                &self.bindings(maps, pi),
+                |v| self.lit_program(v),
+                (MapPass::Mask, false),
+            );
             set_scissor(gl, None);
             masks.push(Mask {
                 light: lp.light,
@@ -147,9 +126,20 @@ impl<'a> FrameRun<'a> {
     pub(super) fn hybrid_mask_now(&mut self, pi: usize, maps: &[ViewMap]) {
         let plan = self.ctx.plan;
         let lp = &plan.lights[pi];
-        let drawn = self.mask_now(lp, |run, mtarget| {
-            let v = run.volumes_of(lp)?;
-            Some(run.hybrid_mask(pi, maps, &v, mtarget))
+        let drawn = self.mask_now(lp, |run, mtarget| match run.volumes_of(lp) {
+            Some(v) => Some(run.hybrid_mask(pi, maps, &v, mtarget)),
+            // No volumes drawn: its maps decide alone, as the frame's lit pass had them.
+            None => {
+                let bindings = run.bindings(maps, pi);
+                draw_maps(
+                    &run.ctx,
+                    lp,
+                    &bindings,
+                    |v| run.lit_program(v),
+                    (MapPass::Mask, false),
+                );
+                None
+            }
         });
         if let (Some(Some((stencil, fragments))), Some(mask)) = (drawn, self.masks_in_frame.last())
         {
