@@ -53,6 +53,10 @@ pub struct ShadowMaps {
     /// Advanced once per frame when every light's maps are drawn first, once per light when
     /// each light's are drawn before its pass: textures used at the current stamp are in use.
     stamp: u64,
+    /// The stamps the frame and the one before began at: textures used since `frame_start`
+    /// were used by this frame, those used since `previous_start` before it by the last.
+    frame_start: u64,
+    previous_start: u64,
     /// Textures taken over or deleted to stay within the budget, since the renderer began.
     given_up: usize,
     slots: Slots,
@@ -154,9 +158,37 @@ impl ShadowMaps {
         self.budget = budget;
     }
 
+    /// Starts a frame (and its first stamp).
+    pub fn start_frame(&mut self) {
+        self.previous_start = self.frame_start;
+        self.stamp += 1;
+        self.frame_start = self.stamp;
+    }
+
     /// Starts a new stamp: the textures used so far may be given up for those used next.
     pub fn next_stamp(&mut self) {
         self.stamp += 1;
+    }
+
+    /// The order in which a texture last used at `used` is given up (lowest first), or None
+    /// while the current stamp uses it: first those neither this frame nor the last used,
+    /// least recently used first; then this frame's, most recently used first; then those
+    /// the last frame used and this one has not yet, most recently used first. Lights draw
+    /// their maps in the same order every frame, so this gives up the map needed again
+    /// furthest ahead (the optimal choice for a fixed order). Least recently used first gave
+    /// up exactly the map the next light needs: over the budget with each light's maps drawn
+    /// before its pass, a still camera drew every map again every frame.
+    fn give_up_order(&self, used: u64) -> Option<(u8, i64)> {
+        let used_i = used as i64;
+        if used >= self.stamp {
+            None
+        } else if used < self.previous_start {
+            Some((0, used_i))
+        } else if used >= self.frame_start {
+            Some((1, -used_i))
+        } else {
+            Some((2, -used_i))
+        }
     }
 
     /// Textures taken over or deleted to keep within the budget so far.
@@ -254,13 +286,15 @@ impl ShadowMaps {
         if self.bytes() + key.bytes() <= budget {
             return None;
         }
-        let stamp = self.stamp;
-        let at = self
-            .slots_of(role)
-            .iter()
-            .filter(|(_, s)| s.key == key && s.used < stamp)
-            .min_by_key(|(_, s)| s.used)
-            .map(|(at, _)| *at)?;
+        let at = match role {
+            Role::Map => &self.slots,
+            Role::Static => &self.statics,
+        }
+        .iter()
+        .filter(|(_, s)| s.key == key)
+        .filter_map(|(at, s)| Some((self.give_up_order(s.used)?, *at)))
+        .min()
+        .map(|(_, at)| at)?;
         let slot = self.slots_of(role).remove(&at).expect("present");
         if role == Role::Map {
             self.delete_ids(gl, at);
@@ -275,9 +309,8 @@ impl ShadowMaps {
         let Some(budget) = self.budget else {
             return;
         };
-        let stamp = self.stamp;
         while self.bytes() + need > budget {
-            let oldest = [Role::Map, Role::Static]
+            let first = [Role::Map, Role::Static]
                 .into_iter()
                 .flat_map(|role| {
                     let slots = match role {
@@ -286,9 +319,9 @@ impl ShadowMaps {
                     };
                     slots.iter().map(move |(at, s)| (role, *at, s.used))
                 })
-                .filter(|&(_, _, used)| used < stamp)
-                .min_by_key(|&(_, _, used)| used);
-            let Some((role, at, _)) = oldest else {
+                .filter_map(|(role, at, used)| Some((self.give_up_order(used)?, role, at)))
+                .min_by_key(|&(order, _, at)| (order, at));
+            let Some((_, role, at)) = first else {
                 return;
             };
             let slot = self.slots_of(role).remove(&at).expect("present");

@@ -384,13 +384,15 @@ define_options! {
         /// Memory for shadow maps, in MiB (depth, static and ID textures together). A frame
         /// whose maps fit draws every light's maps first, as the paper does, and keeps them
         /// for later frames while they fit; one whose maps would hold more draws each light's
-        /// maps just before its own pass, into textures the lights share, the least recently
-        /// drawn given up first, so memory stays within this whatever the lights and sizes
-        /// (on oa_dm3, 51 omni lights of 2048-texel cubes would hold 5 GB). A paper's frame
-        /// (`plan.enabled = false`) whose lights also hold volume buffers (hybrid) draws its
-        /// maps per light whenever a budget is set: it keeps no map for a later frame, so that
-        /// costs no draw more. The planner's frames of the five benchmark scenes hold at most
-        /// 318 MB (oa_dm3). 0: no limit, every map first (the paper).
+        /// maps just before its own pass, into textures the lights share, so memory stays
+        /// within this whatever the lights and sizes (on oa_dm3, 51 omni lights of
+        /// 2048-texel cubes would hold 5 GB); the maps that fit are kept for the next frame
+        /// (the one needed again furthest ahead is given up first), so a still camera draws
+        /// again only those that did not fit. A paper's frame (`plan.enabled = false`) keeps
+        /// no map for a later frame: drawing per light, it holds one light's maps at a time,
+        /// and where its lights also hold volume buffers (hybrid) it draws per light whenever
+        /// a budget is set (no draw more). The planner's frames of the five benchmark scenes
+        /// hold at most 318 MB (oa_dm3). 0: no limit, every map first (the paper).
         budget_mb: f32 = 512.0, in 0.0 ..= 1048576.0;
         /// Hardware compare (sampler2DShadow, LEQUAL) or a compare in the shader.
         compare: Compare = Compare::Hardware;

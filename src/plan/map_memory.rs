@@ -89,6 +89,27 @@ pub fn maps_per_light(plan: &Plan, o: &ShadowMapOptions, drawn_each_frame: bool)
     )
 }
 
+/// Bytes the frame's map textures may hold together: the budget, or, where each light's maps
+/// are drawn just before its pass and no view's map is kept for a later frame (no view has a
+/// key: the paper's frame, or `plan.cache_maps = false`), only what the largest light needs.
+/// A texture of a light already drawn then holds nothing anything reads again, so the next
+/// light takes it over; kept to the budget, they had filled it with maps never read (a
+/// paper's-frame hybrid on oa_dm3 under `omni = frusta`: 542 MB in 672 textures).
+pub fn held_bytes(plan: &Plan, o: &ShadowMapOptions) -> Option<u64> {
+    let budget = budget_bytes(o);
+    let kept = plan.lights.iter().any(|lp| {
+        lp.view_keys.iter().any(Option::is_some) || lp.view_static_keys.iter().any(Option::is_some)
+    });
+    if !plan.maps_per_light || kept {
+        return budget;
+    }
+    let largest = plan.lights.iter().map(|lp| light_map_bytes(lp, o)).max();
+    match (budget, largest) {
+        (Some(b), Some(l)) => Some(b.min(l)),
+        (b, _) => b,
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

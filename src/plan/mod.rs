@@ -277,6 +277,9 @@ pub struct Plan {
     /// the frame's maps together would hold more than `shadow_map.budget_mb`
     /// ([`map_memory`]). Otherwise every light's maps are drawn first (the paper).
     pub maps_per_light: bool,
+    /// Bytes the map textures may hold together this frame ([`map_memory::held_bytes`]; None:
+    /// no limit).
+    pub map_budget: Option<u64>,
     /// Lights sent between two fences, the one before waited for (`gl.lights_per_fence`; 0:
     /// no fence, no wait).
     pub lights_per_fence: u32,

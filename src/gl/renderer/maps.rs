@@ -11,10 +11,10 @@ impl<'a> FrameRun<'a> {
     pub(crate) fn shadow_map_passes(&mut self) -> Flow<Vec<ViewMap>> {
         let plan = self.ctx.plan;
         let mut maps: Vec<ViewMap> = Vec::new();
+        self.shadow_maps.start_frame();
         if plan.maps_per_light {
             return Ok(ControlFlow::Continue(maps));
         }
-        self.shadow_maps.next_stamp();
         for (pi, lp) in plan.lights.iter().enumerate() {
             if lp.technique.uses_maps() {
                 maps.extend(go_on!(self.light_maps(pi)));

@@ -510,7 +510,7 @@ impl Drawer {
         if scratch {
             self.ensure_map_scratch(largest, float_depth)?;
         }
-        self.shadow_maps.set_budget(map_memory::budget_bytes(sm));
+        self.shadow_maps.set_budget(plan.map_budget);
         if request.masks && self.measure_targets.is_none() {
             let g = GBufferTarget::new(&self.gl, self.target.width, self.target.height)
                 .map_err(RenderError::Gl)?;

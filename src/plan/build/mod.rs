@@ -121,6 +121,7 @@ impl Plan {
             stencil,
             culled,
             maps_per_light: false,
+            map_budget: None,
             lights_per_fence: options.gl.lights_per_fence,
             stats,
         };
@@ -128,6 +129,7 @@ impl Plan {
         let (per_light, bytes) =
             super::map_memory::maps_per_light(&plan, &options.shadow_map, !p.enabled);
         plan.maps_per_light = per_light;
+        plan.map_budget = super::map_memory::held_bytes(&plan, &options.shadow_map);
         plan.stats.maps_per_light = per_light;
         plan.stats.map_bytes = bytes;
         plan
