@@ -226,3 +226,51 @@ fn a_still_camera_over_the_budget_draws_again_only_the_maps_that_did_not_fit() {
         assert_eq!(common::differing(ma, mb), 0, "light {}'s mask", ma.light);
     }
 }
+
+#[test]
+fn a_round_robin_bench_draws_each_error_frame_from_the_scene_alone() {
+    // Round-robin timing draws each configuration's error frame on the bench's own renderer,
+    // one configuration after another. A frame without maps keeps the last frame's maps, so
+    // a volumes configuration after a maps one held both (`tune`'s final round on oa_dm3:
+    // a planned PSM's 512 MiB of maps beside the paper's-frame subdivision's buffers).
+    use shadowlab::report::bench::{Bench, BenchConfig, BenchSettings};
+    use shadowlab::scene::path::PathKey;
+    let (scene, _, mut o) = load_scene_file("oa_dm1");
+    o.width = 160;
+    o.height = 120;
+    o.estimate.samples = 0;
+    let (_ctx, mut r) = common::gl_on(BackendChoice::Egl, &o);
+    r.load_scene(&scene).unwrap();
+    let configs: Vec<BenchConfig> = ["shadow_map", "shadow_volume"]
+        .iter()
+        .map(|t| {
+            let mut c = o.clone();
+            c.set_assignment(&format!("technique={t}")).unwrap();
+            BenchConfig::named(t, c)
+        })
+        .collect();
+    let settings = BenchSettings {
+        warmup: 1,
+        frames: 1,
+        path: vec![PathKey::of(&scene.camera)],
+        progress: false,
+        interleave: true,
+        breakdown: false,
+        pipelined: false,
+        motion: false,
+        sample_every: 1,
+        memory_mb: None,
+        enough_seconds: None,
+    };
+    let rows = Bench::new(&mut r, &scene, settings)
+        .run(&configs)
+        .unwrap_or_else(|e| panic!("{e}"));
+    assert_eq!(rows.len(), 2);
+    assert!(rows[0].error.total < 0.01, "{}", rows[0].error.total);
+    let held = r.held();
+    assert_eq!(
+        held,
+        shadowlab::run::Held::default(),
+        "after the volumes' error frame"
+    );
+}

@@ -67,6 +67,8 @@ fn write_batched<'a>(gl: &glow::Context, at: usize, meshes: impl Iterator<Item =
 #[derive(Default)]
 pub struct VolumeBuffers {
     lights: HashMap<usize, Buffers>,
+    /// Bytes each light's vertex and index buffers were last given.
+    sizes: HashMap<usize, (u64, u64)>,
 }
 
 impl VolumeBuffers {
@@ -85,6 +87,7 @@ impl VolumeBuffers {
                 gl.bind_vertex_array(Some(b.vao));
                 gl.bind_buffer(glow::ARRAY_BUFFER, Some(b.vbo));
                 if let Some(n) = up.allocate {
+                    self.sizes.entry(draws.light).or_default().0 = (n * vertex_bytes) as u64;
                     gl.buffer_data_size(
                         glow::ARRAY_BUFFER,
                         (n * vertex_bytes) as i32,
@@ -99,6 +102,8 @@ impl VolumeBuffers {
             }
         }
         if let Some(indices) = &draws.upload.indices {
+            self.sizes.entry(draws.light).or_default().1 =
+                std::mem::size_of_val(&indices[..]) as u64;
             // SAFETY: uploads plain u32 indices into the light's own vertex array's index
             // buffer (bound while the array is, so the array keeps it).
             unsafe {
@@ -128,6 +133,11 @@ impl VolumeBuffers {
         })
     }
 
+    /// Bytes the buffers hold together.
+    pub fn bytes(&self) -> u64 {
+        self.sizes.values().map(|(v, i)| v + i).sum()
+    }
+
     /// GL objects held (vertex arrays and buffers), for leak checks.
     pub fn object_count(&self) -> usize {
         self.lights.len() * 3
@@ -137,5 +147,6 @@ impl VolumeBuffers {
         for (_, b) in self.lights.drain() {
             b.delete(gl);
         }
+        self.sizes.clear();
     }
 }

@@ -268,7 +268,7 @@ impl Planner {
     }
 
     /// Volume parts and depth fits kept for later frames.
-    pub fn held_volumes(&self) -> (usize, usize) {
+    pub fn held_volumes(&self) -> (usize, usize, u64) {
         self.volumes.held()
     }
 

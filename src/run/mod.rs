@@ -40,6 +40,8 @@ pub struct Held {
     pub map_bytes: u64,
     /// Volume parts built and kept for the frames that draw them again.
     pub volume_parts: usize,
+    /// Bytes of the volumes held: the parts' CPU copies and every light's GPU buffers.
+    pub volume_bytes: u64,
     /// Depth-pass parts' clip planes fitted to the last depth buffer.
     pub depth_fits: usize,
 }
@@ -133,11 +135,12 @@ impl Renderer {
 
     /// What the renderer keeps across frames, counted: long runs hold these flat.
     pub fn held(&self) -> Held {
-        let (volume_parts, depth_fits) = self.planner.held_volumes();
+        let (volume_parts, depth_fits, copies) = self.planner.held_volumes();
         Held {
             map_textures: self.drawer.shadow_map_textures(),
             map_bytes: self.drawer.shadow_map_bytes(),
             volume_parts,
+            volume_bytes: copies + self.drawer.volume_buffer_bytes(),
             depth_fits,
         }
     }

@@ -311,6 +311,11 @@ impl Drawer {
         self.shadow_maps.bytes()
     }
 
+    /// Bytes of every light's shadow-volume buffers.
+    pub fn volume_buffer_bytes(&self) -> u64 {
+        self.volume_buffers.bytes()
+    }
+
     /// Uploads a scene, replacing the previous one.
     pub fn load_scene(&mut self, scene: &Scene) -> Result<(), RenderError> {
         if let Some(old) = self.gpu.take() {

@@ -472,10 +472,18 @@ struct Layout {
 }
 
 impl VolumePlanner {
-    /// Volume parts kept for later frames, all lights together, and depth fits kept.
-    pub fn held(&self) -> (usize, usize) {
+    /// Volume parts kept for later frames, all lights together, depth fits kept, and the
+    /// bytes of the parts' vertices.
+    pub fn held(&self) -> (usize, usize, u64) {
         let parts = self.lights.values().map(|l| l.meshes.len()).sum();
-        (parts, self.fits.len())
+        let vertices: usize = self
+            .lights
+            .values()
+            .flat_map(|l| l.meshes.values())
+            .map(|c| c.mesh.vertices.len())
+            .sum();
+        let bytes = (vertices * std::mem::size_of::<[f32; 4]>()) as u64;
+        (parts, self.fits.len(), bytes)
     }
 
     /// Once a frame, before [`VolumePlanner::prepare`]: `same_depth` says the depth buffer

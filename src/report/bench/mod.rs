@@ -872,6 +872,14 @@ impl<'a> Bench<'a> {
             } else {
                 None
             };
+            if self.settings.interleave {
+                // The error and sampled frames were drawn here, the timed ones on renderers of
+                // their own: the next configuration's error frame starts from the scene alone.
+                // A frame without maps keeps the last one's (`ShadowMaps::release_unlike`), so
+                // `tune`'s final round on oa_dm3 held a planned PSM's 512 MiB of maps beside
+                // the paper's-frame subdivision's fragment buffers.
+                self.renderer.release_kept();
+            }
             rows.push(BenchRow {
                 scene: self.scene.name.clone(),
                 technique: c.options.technique.to_string(),
