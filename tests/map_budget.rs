@@ -231,8 +231,8 @@ fn a_still_camera_over_the_budget_draws_again_only_the_maps_that_did_not_fit() {
 fn a_round_robin_bench_draws_each_error_frame_from_the_scene_alone() {
     // Round-robin timing draws each configuration's error frame on the bench's own renderer,
     // one configuration after another. A frame without maps keeps the last frame's maps, so
-    // a volumes configuration after a maps one held both (`tune`'s final round on oa_dm3:
-    // a planned PSM's 512 MiB of maps beside the paper's-frame subdivision's buffers).
+    // a volumes configuration after a maps one held both (oa_dm3: a planned PSM's 512 MiB of
+    // maps beside the subdivision's fragment buffers).
     use shadowlab::report::bench::{Bench, BenchConfig, BenchSettings};
     use shadowlab::scene::path::PathKey;
     let (scene, _, mut o) = load_scene_file("oa_dm1");

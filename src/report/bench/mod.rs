@@ -875,9 +875,9 @@ impl<'a> Bench<'a> {
             if self.settings.interleave {
                 // The error and sampled frames were drawn here, the timed ones on renderers of
                 // their own: the next configuration's error frame starts from the scene alone.
-                // A frame without maps keeps the last one's (`ShadowMaps::release_unlike`), so
-                // `tune`'s final round on oa_dm3 held a planned PSM's 512 MiB of maps beside
-                // the paper's-frame subdivision's fragment buffers.
+                // A frame without maps keeps the last one's (`ShadowMaps::release_unlike`):
+                // six planned configurations of oa_dm3 drew the subdivision's error frame
+                // beside a PSM's 512 MiB of maps (peak 1.16 GB; 0.93 GB released).
                 self.renderer.release_kept();
             }
             rows.push(BenchRow {
