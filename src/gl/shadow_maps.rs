@@ -212,6 +212,13 @@ impl ShadowMaps {
         maps + ids
     }
 
+    fn slots_in(&self, role: Role) -> &Slots {
+        match role {
+            Role::Map => &self.slots,
+            Role::Static => &self.statics,
+        }
+    }
+
     fn slots_of(&mut self, role: Role) -> &mut Slots {
         match role {
             Role::Map => &mut self.slots,
@@ -286,15 +293,13 @@ impl ShadowMaps {
         if self.bytes() + key.bytes() <= budget {
             return None;
         }
-        let at = match role {
-            Role::Map => &self.slots,
-            Role::Static => &self.statics,
-        }
-        .iter()
-        .filter(|(_, s)| s.key == key)
-        .filter_map(|(at, s)| Some((self.give_up_order(s.used)?, *at)))
-        .min()
-        .map(|(_, at)| at)?;
+        let at = self
+            .slots_in(role)
+            .iter()
+            .filter(|(_, s)| s.key == key)
+            .filter_map(|(at, s)| Some((self.give_up_order(s.used)?, *at)))
+            .min()
+            .map(|(_, at)| at)?;
         let slot = self.slots_of(role).remove(&at).expect("present");
         if role == Role::Map {
             self.delete_ids(gl, at);
@@ -313,11 +318,9 @@ impl ShadowMaps {
             let first = [Role::Map, Role::Static]
                 .into_iter()
                 .flat_map(|role| {
-                    let slots = match role {
-                        Role::Map => &self.slots,
-                        Role::Static => &self.statics,
-                    };
-                    slots.iter().map(move |(at, s)| (role, *at, s.used))
+                    self.slots_in(role)
+                        .iter()
+                        .map(move |(at, s)| (role, *at, s.used))
                 })
                 .filter_map(|(role, at, used)| Some((self.give_up_order(used)?, role, at)))
                 .min_by_key(|&(order, _, at)| (order, at));

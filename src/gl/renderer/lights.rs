@@ -55,15 +55,7 @@ impl<'a> FrameRun<'a> {
                 }
                 go_on!(self.step(StepKind::Lit, Some(lp), None, Self::color_image));
                 if self.mask_in_frame(lp) {
-                    self.mask_now(lp, |run, _| {
-                        draw_maps(
-                            &run.ctx,
-                            lp,
-                            &run.bindings(maps, pi),
-                            |v| run.lit_program(v),
-                            (MapPass::Mask, false),
-                        )
-                    });
+                    self.mask_now(lp, |run, _| run.map_mask(lp, maps, pi));
                 }
             }
             self.queue.light_sent().map_err(RenderError::Gl)?;

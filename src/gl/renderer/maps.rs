@@ -363,6 +363,17 @@ fn image_casters<'p>(
 }
 
 impl<'a> FrameRun<'a> {
+    /// Light `pi`'s mask drawn from its maps `maps` into the bound mask target.
+    pub(super) fn map_mask(&self, lp: &LightPlan, maps: &[ViewMap], pi: usize) {
+        draw_maps(
+            &self.ctx,
+            lp,
+            &self.bindings(maps, pi),
+            |v| self.lit_program(v),
+            (MapPass::Mask, false),
+        )
+    }
+
     /// The shadow-map bindings of light `pi`'s lit passes: per view, whether it is a cube,
     /// its map, the receivers it lights and its rectangle.
     pub(super) fn bindings(

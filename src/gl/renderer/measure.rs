@@ -48,13 +48,7 @@ impl<'a> FrameRun<'a> {
             }
             // Lights with volumes, fragments or maps drawn per light had theirs drawn within
             // the frame (`mask_in_frame`): what is left reads maps the frame kept.
-            draw_maps(
-                &self.ctx,
-                lp,
-                &self.bindings(maps, pi),
-                |v| self.lit_program(v),
-                (MapPass::Mask, false),
-            );
+            self.map_mask(lp, maps, pi);
             set_scissor(gl, None);
             masks.push(Mask {
                 light: lp.light,
