@@ -233,36 +233,12 @@ fn a_round_robin_bench_draws_each_error_frame_from_the_scene_alone() {
     // one configuration after another. A frame without maps keeps the last frame's maps, so
     // a volumes configuration after a maps one held both (oa_dm3: a planned PSM's 512 MiB of
     // maps beside the subdivision's fragment buffers).
-    use shadowlab::report::bench::{Bench, BenchConfig, BenchSettings};
-    use shadowlab::scene::path::PathKey;
-    let (scene, _, mut o) = load_scene_file("oa_dm1");
-    o.width = 160;
-    o.height = 120;
-    o.estimate.samples = 0;
+    use shadowlab::report::bench::Bench;
+    let (scene, o) = small_oa_dm1();
     let (_ctx, mut r) = common::gl_on(BackendChoice::Egl, &o);
     r.load_scene(&scene).unwrap();
-    let configs: Vec<BenchConfig> = ["shadow_map", "shadow_volume"]
-        .iter()
-        .map(|t| {
-            let mut c = o.clone();
-            c.set_assignment(&format!("technique={t}")).unwrap();
-            BenchConfig::named(t, c)
-        })
-        .collect();
-    let settings = BenchSettings {
-        warmup: 1,
-        frames: 1,
-        path: vec![PathKey::of(&scene.camera)],
-        progress: false,
-        interleave: true,
-        breakdown: false,
-        pipelined: false,
-        motion: false,
-        sample_every: 1,
-        memory_mb: None,
-        enough_seconds: None,
-    };
-    let rows = Bench::new(&mut r, &scene, settings)
+    let configs = technique_configs(&o, &["shadow_map", "shadow_volume"]);
+    let rows = Bench::new(&mut r, &scene, one_frame(&scene, true, None))
         .run(&configs)
         .unwrap_or_else(|e| panic!("{e}"));
     assert_eq!(rows.len(), 2);
@@ -273,4 +249,86 @@ fn a_round_robin_bench_draws_each_error_frame_from_the_scene_alone() {
         shadowlab::run::Held::default(),
         "after the volumes' error frame"
     );
+}
+
+#[test]
+fn a_round_robin_bench_groups_its_renderers_by_what_each_held_before() {
+    // `tune`'s final round times its finalists round-robin, a group of renderers at a time
+    // within `--memory-mb`. The groups counted each renderer's planned maps only, so volumes
+    // and the subdivision's fragments (no maps) all went into one group whatever they held;
+    // now they count what the same options held in the rungs before.
+    use shadowlab::report::bench::{Bench, BenchRow};
+    let (scene, o) = small_oa_dm1();
+    let (_ctx, mut r) = common::gl_on(BackendChoice::Egl, &o);
+    r.load_scene(&scene).unwrap();
+    let configs = technique_configs(&o, &["shadow_volume", "subdivision"]);
+    let settings =
+        |interleave: bool, memory_mb: Option<f32>| one_frame(&scene, interleave, memory_mb);
+    let groups = |rows: &[BenchRow]| -> Vec<Option<usize>> {
+        rows.iter().map(|row| row.round_robin_group).collect()
+    };
+    // One after another, as the rungs measure.
+    let mut rungs = Bench::new(&mut r, &scene, settings(false, None));
+    let measured = rungs.run(&configs).unwrap_or_else(|e| panic!("{e}"));
+    let kept = rungs.take_kept();
+    let held: Vec<u64> = measured.iter().map(|row| row.held_bytes).collect();
+    assert_eq!(groups(&measured), [None, None]);
+    assert!(held.iter().all(|&b| b > 0), "held {held:?}");
+    // A limit below what either held: each needs a group of its own.
+    let limit = Some((*held.iter().min().unwrap() as f64 / 2.0 / 1048576.0) as f32);
+    let fresh = Bench::new(&mut r, &scene, settings(true, limit))
+        .run(&configs)
+        .unwrap_or_else(|e| panic!("{e}"));
+    // Without an earlier bench only the planned maps count, and neither plans any.
+    assert_eq!(groups(&fresh), [Some(0), Some(0)]);
+    let after_rungs = Bench::new(&mut r, &scene, settings(true, limit))
+        .with_kept(kept)
+        .run(&configs)
+        .unwrap_or_else(|e| panic!("{e}"));
+    assert_eq!(groups(&after_rungs), [Some(0), Some(1)], "held {held:?}");
+}
+
+/// oa_dm1 at 160x120, unsampled: the round-robin cases' scene.
+fn small_oa_dm1() -> (Scene, Options) {
+    let (scene, _, mut o) = load_scene_file("oa_dm1");
+    o.width = 160;
+    o.height = 120;
+    o.estimate.samples = 0;
+    (scene, o)
+}
+
+/// `o` with each of `techniques`, named by it.
+fn technique_configs(
+    o: &Options,
+    techniques: &[&str],
+) -> Vec<shadowlab::report::bench::BenchConfig> {
+    techniques
+        .iter()
+        .map(|t| {
+            let mut c = o.clone();
+            c.set_assignment(&format!("technique={t}")).unwrap();
+            shadowlab::report::bench::BenchConfig::named(t, c)
+        })
+        .collect()
+}
+
+/// One warm-up and one measured frame of the scene's camera, nothing broken down.
+fn one_frame(
+    scene: &Scene,
+    interleave: bool,
+    memory_mb: Option<f32>,
+) -> shadowlab::report::bench::BenchSettings {
+    shadowlab::report::bench::BenchSettings {
+        warmup: 1,
+        frames: 1,
+        path: vec![shadowlab::scene::path::PathKey::of(&scene.camera)],
+        progress: false,
+        interleave,
+        breakdown: false,
+        pipelined: false,
+        motion: false,
+        sample_every: 1,
+        memory_mb,
+        enough_seconds: None,
+    }
 }

@@ -250,3 +250,35 @@ fn bench_json_holds_every_field_for_a_two_configuration_sweep() {
     );
     std::fs::remove_dir_all(&dir).ok();
 }
+
+/// A light's decision mask draws only the receivers whose bounds meet its sphere (on the
+/// paper's frame every surface is a receiver of every light, and drawing them all made the
+/// masks half an error frame on oa_dm3). Every pixel a light reaches must still hold its
+/// decision: none of the paper's frame's receivers may differ between mask and reference.
+/// Made to fail: with the sphere at 0.7 of the light's radius, thousands of reached pixels
+/// held no decision.
+#[test]
+fn masks_drawn_from_each_lights_range_hold_every_reached_pixel() {
+    let (scene, _, base) = common::load_scene_file("oa_dm1");
+    let mut m = common::Measurer::new(scene, &base);
+    for technique in ["shadow_volume", "shadow_map"] {
+        let mut o = base.clone();
+        for s in ["plan.enabled=false", "width=320", "height=240"] {
+            o.set_assignment(s).unwrap();
+        }
+        o.set_assignment(&format!("technique={technique}")).unwrap();
+        let r = m.measure(&o);
+        for (light, c) in &r.per_light {
+            println!(
+                "{technique} light {light}: {} receivers, {} mismatched",
+                c.receiver_pixels, c.receiver_mismatch
+            );
+        }
+        assert!(
+            r.total.receiver_pixels > 10_000,
+            "{technique}: {:?}",
+            r.total
+        );
+        assert_eq!(r.total.receiver_mismatch, 0, "{technique}: {:?}", r.total);
+    }
+}

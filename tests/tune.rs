@@ -115,3 +115,34 @@ fn a_rung_carries_the_rows_that_stopped_at_enough_seconds() {
         assert_eq!(result.rows.len(), 2);
     }
 }
+
+/// On one still view the rungs sample the masks of the error frames they draw, so the final
+/// round draws no finalist's error frame again (on oa_dm3 a paper's-frame finalist's takes
+/// seconds). Made to fail: with the rungs' samples zeroed, the final round drew one per
+/// finalist.
+#[test]
+fn the_final_round_on_one_view_draws_no_error_frame_again() {
+    let scene = builtin::default_scene();
+    let base = options_with(&["width=160", "height=120", "estimate.samples=256"]);
+    let mut m = Measurer::new(scene.clone(), &base);
+    let mut settings = TuneSettings::new(6, vec![PathKey::of(&scene.camera)]);
+    settings.rung_frames = vec![1];
+    settings.finalists = 2;
+    settings.final_frames = 1;
+    settings.per_light = false;
+    let hidden = ProgressBar::hidden();
+    let result = tune(m.renderer(), &scene, &base, &settings, &hidden).unwrap();
+    let (first, last) = (&result.rungs[0], result.rungs.last().unwrap());
+    assert_eq!(
+        first.error_frames, first.configurations,
+        "{:?}",
+        result.rungs
+    );
+    assert_eq!((last.stage, last.configurations), ("final", 2));
+    assert_eq!(last.error_frames, 0, "{:?}", result.rungs);
+    for r in &result.rows {
+        let sampled = r.sampled.as_ref().expect("a finalist's sampled error");
+        assert_eq!(sampled.frames.len(), 1, "{}", r.label);
+        assert_eq!(sampled.samples_per_light, 256, "{}", r.label);
+    }
+}

@@ -39,9 +39,10 @@ pub struct Args {
     /// recorded path, else 1).
     #[arg(long)]
     sample_every: Option<usize>,
-    /// MiB the round-robin renderers' shadow maps may hold together: past it the
-    /// configurations are timed a group at a time, each with its baseline (default: all at
-    /// once). Each renderer's own maps stay within `shadow_map.budget_mb`.
+    /// MiB the round-robin renderers may hold together (their shadow maps as planned for the
+    /// first frame): past it the configurations are timed a group at a time, each with its
+    /// baseline (default: all at once). Each renderer's own maps stay within
+    /// `shadow_map.budget_mb`.
     #[arg(long, value_name = "MIB")]
     memory_mb: Option<f32>,
     /// On a still camera with the scene standing, a configuration's measured frames (and its

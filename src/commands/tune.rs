@@ -42,9 +42,11 @@ pub struct Args {
     /// within the target).
     #[arg(long)]
     no_per_light: bool,
-    /// MiB the final round's renderers' shadow maps may hold together: past it the finalists
-    /// are timed a group at a time, each with its baseline (0: all at once, whatever they
-    /// hold). Each renderer's own maps stay within `shadow_map.budget_mb`.
+    /// MiB the final round's renderers may hold together (maps, volume buffers and their CPU
+    /// copies, subdivision fragments: what each finalist held after its frames in the
+    /// rungs): past it the finalists are timed a group at a time, each with its baseline (0:
+    /// all at once, whatever they hold). Each renderer's own maps stay within
+    /// `shadow_map.budget_mb`.
     #[arg(long, value_name = "MIB", default_value_t = shadowlab::report::tune::DEFAULT_MEMORY_MB)]
     memory_mb: f32,
     /// On a still camera, a candidate's measured frames stop once they add up to this many
@@ -203,8 +205,8 @@ pub fn run(common: &CommonArgs, args: &Args) -> Result<()> {
                 String::new()
             };
             format!(
-                "{}: {} configurations × {} frames{carried} → {outcome} ({:.0} s)",
-                r.stage, r.configurations, r.frames, r.seconds
+                "{}: {} configurations × {} frames{carried}, {} error frames → {outcome} ({:.0} s)",
+                r.stage, r.configurations, r.frames, r.error_frames, r.seconds
             )
         })
         .collect();

@@ -16,6 +16,8 @@ struct LightFragments {
     buffers: Buffers,
     marks: [MarkRange; 3],
     stats: SubdivisionStats,
+    /// Bytes of its corners on the GPU.
+    bytes: u64,
 }
 
 /// The corners of one cull mode's fragments in a light's buffer: each is drawn culled as its
@@ -184,6 +186,7 @@ impl FragmentBuffers {
                 buffers: entry,
                 marks,
                 stats: sub.stats,
+                bytes: std::mem::size_of_val(corners.as_slice()) as u64,
             },
         );
         Ok(FragmentsUpdate {
@@ -201,6 +204,11 @@ impl FragmentBuffers {
             ebo: f.buffers.ebo,
             marks: f.marks,
         })
+    }
+
+    /// Bytes of every light's fragments on the GPU.
+    pub fn bytes(&self) -> u64 {
+        self.lights.values().map(|f| f.bytes).sum()
     }
 
     /// GL objects held (vertex arrays and buffers), for leak checks.

@@ -146,6 +146,12 @@ pub struct LightPlan {
     pub extruded: Vec<(usize, Counting)>,
     /// Surfaces the lit pass draws: visible receivers the light can reach.
     pub receivers: Vec<u32>,
+    /// Of `receivers`, sorted, those whose bounds meet the light's sphere (a hair enlarged):
+    /// what a decision mask draws. A fragment of any other is further from the light than
+    /// its radius, which the mask's shader discards as unreached, so the mask is the same;
+    /// the paper's frame (every surface a receiver) then draws each light's mask from the few
+    /// surfaces in its range, not the whole map six times.
+    pub mask_receivers: Vec<u32>,
     /// Per shadow-map view, the receivers its lit pass draws (an omni light's six spots: those
     /// in the face's pyramid).
     pub view_receivers: Vec<Vec<u32>>,
@@ -193,6 +199,15 @@ pub struct ImageCasters {
 }
 
 impl LightPlan {
+    /// Of `receivers` (the light's, or one of its views'), those its decision mask draws.
+    pub fn masked(&self, receivers: &[u32]) -> Vec<u32> {
+        receivers
+            .iter()
+            .copied()
+            .filter(|s| self.mask_receivers.binary_search(s).is_ok())
+            .collect()
+    }
+
     /// Whether the light counts shadow volumes into its stencil: its technique's, or a
     /// subdivided light's for its models.
     pub fn counts_volumes(&self) -> bool {

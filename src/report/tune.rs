@@ -226,6 +226,10 @@ pub struct TuneSettings {
     pub finalists: usize,
     /// Measured frames of the final round (round-robin).
     pub final_frames: usize,
+    /// Time the finalists pass by pass too (`pass_ms`, one frame per measured frame, each
+    /// pass between two glFinish calls where timer queries do not work) and with frames in
+    /// flight (`pipelined_ms`). `reproduce`'s frontier shows neither, so it sets this off.
+    pub breakdown: bool,
     pub seed: u64,
     /// Also measure, per light, the map sizes and filters of `per_light_configs` and name each
     /// light's cheapest within `accuracy`.
@@ -235,9 +239,10 @@ pub struct TuneSettings {
     /// Camera poses, cycled through.
     #[serde(skip)]
     pub path: Vec<PathKey>,
-    /// MiB the final round's renderers' shadow maps may hold together: past it the finalists
-    /// are timed a group at a time (`BenchSettings::memory_mb`). Each renderer's own maps
-    /// stay within `shadow_map.budget_mb`.
+    /// MiB the final round's renderers may hold together (maps, volumes and fragments, as
+    /// the rungs measured each finalist): past it the finalists are timed a group at a time
+    /// (`BenchSettings::memory_mb`). Each renderer's own maps stay within
+    /// `shadow_map.budget_mb`.
     pub memory_mb: Option<f32>,
     /// A candidate's frames stop once they add up to this many seconds, on a still camera
     /// (`BenchSettings::enough_seconds`).
@@ -257,6 +262,7 @@ impl TuneSettings {
             rung_frames: vec![2, 4],
             finalists: 8,
             final_frames: 8,
+            breakdown: true,
             seed: 1,
             per_light: true,
             accuracy: 0.5,
@@ -280,6 +286,8 @@ pub struct Rung {
     /// stopped short of that rung's at `enough_seconds`, so this rung would take as many
     /// frames of the same still view.
     pub carried: usize,
+    /// Error frames it drew (configurations whose error an earlier rung took drew none).
+    pub error_frames: usize,
     pub seconds: f64,
 }
 
@@ -454,6 +462,7 @@ fn measure_stage(
     };
     let mut bench = Bench::new(renderer, scene, bench).with_kept(std::mem::take(kept));
     let measured = bench.run_with(&todo, bar);
+    let error_frames = bench.error_frames();
     *kept = bench.take_kept();
     let rows = fill_gaps(carried, configs.len(), measured?);
     let rung = Rung {
@@ -462,6 +471,7 @@ fn measure_stage(
         frames: stage.frames,
         kept: configs.len(),
         carried: configs.len() - todo.len(),
+        error_frames,
         seconds: start.elapsed().as_secs_f64(),
     };
     Ok((rows, rung))
@@ -511,9 +521,13 @@ pub fn tune_keeping(
 ) -> Result<TuneResult, TuneError> {
     let mut base = base.clone();
     // The halving ranks by the exact error of the first frame; sampling the path is for the
-    // final round only.
+    // final round only. On one still view the path is that frame: its masks, sampled as the
+    // rungs draw them (tracing takes milliseconds), are the final round's sample, so no
+    // finalist's error frame is drawn again (on oa_dm3 a paper's-frame finalist's takes 3-40 s).
     let samples = base.estimate.samples;
-    base.estimate.samples = 0;
+    if settings.path.len() > 1 {
+        base.estimate.samples = 0;
+    }
     let mut configs = candidates(&base, &space(), settings.candidates, settings.seed)?;
     let mut rungs = Vec::new();
     let mut carried = Vec::new();
@@ -558,7 +572,7 @@ pub fn tune_keeping(
         prefix: "final, round-robin".into(),
         frames: settings.final_frames,
         interleave: true,
-        breakdown: true,
+        breakdown: settings.breakdown,
     };
     let (rows, rung) = measure_stage(renderer, scene, settings, (&configs, &[]), stage, bar, kept)?;
     rungs.push(rung);

@@ -44,6 +44,15 @@ pub struct Held {
     pub volume_bytes: u64,
     /// Depth-pass parts' clip planes fitted to the last depth buffer.
     pub depth_fits: usize,
+    /// Bytes of the subdivided lights' shadowed fragments on the GPU.
+    pub fragment_bytes: u64,
+}
+
+impl Held {
+    /// Bytes of everything counted: maps, volumes and fragments.
+    pub fn bytes(&self) -> u64 {
+        self.map_bytes + self.volume_bytes + self.fragment_bytes
+    }
 }
 
 /// What [`Renderer::prepare`] readied.
@@ -142,6 +151,7 @@ impl Renderer {
             volume_parts,
             volume_bytes: copies + self.drawer.volume_buffer_bytes(),
             depth_fits,
+            fragment_bytes: self.drawer.fragment_bytes(),
         }
     }
 

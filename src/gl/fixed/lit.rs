@@ -349,6 +349,8 @@ pub fn draw_mask(
 ) {
     let gl = ctx.gl;
     let l = &ff.legacy;
+    // Surfaces out of the light's range would only be removed again.
+    let receivers = &lp.masked(receivers)[..];
     DrawState::OVER_DEPTH.apply(gl);
     let value = |v: u8| {
         // SAFETY: the current colour, written as the mask's byte.

@@ -438,9 +438,11 @@ pub fn draw_mask(
     let gl = ctx.gl;
     DrawState::OVER_DEPTH.apply(gl);
     bind_light(ctx, program, lp, shadow);
-    let items = ctx
-        .gpu
-        .draw_list_of(ctx.scene, crate::gl::upload::Merge::ByMaterial, receivers);
+    let items = ctx.gpu.draw_list_of(
+        ctx.scene,
+        crate::gl::upload::Merge::ByMaterial,
+        &lp.masked(receivers),
+    );
     let counted = match shadow {
         LitShadow::Stencil { .. } => Some((0xff, 1)),
         // Where the count bits are zero the shader decides (the map, or lit at a silhouette).

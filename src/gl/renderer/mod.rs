@@ -316,6 +316,11 @@ impl Drawer {
         self.volume_buffers.bytes()
     }
 
+    /// Bytes of the subdivided lights' fragment buffers.
+    pub fn fragment_bytes(&self) -> u64 {
+        self.fragments.bytes()
+    }
+
     /// Uploads a scene, replacing the previous one.
     pub fn load_scene(&mut self, scene: &Scene) -> Result<(), RenderError> {
         if let Some(old) = self.gpu.take() {

@@ -350,6 +350,7 @@ impl<'a> FrameFacts<'a> {
     /// Light `index`'s work this frame, or None when it is culled.
     fn plan_light(&self, index: usize, order: usize, stats: &mut PlanStats) -> Option<LightPlan> {
         let (receivers, scissor) = self.cull_light(index, stats)?;
+        let mask_receivers = self.in_range(index, &receivers);
         let (chosen, reason) = self.technique_of(index, stats);
         let mut plan = LightPlan {
             light: index,
@@ -361,6 +362,7 @@ impl<'a> FrameFacts<'a> {
             volumes: Vec::new(),
             extruded: Vec::new(),
             receivers,
+            mask_receivers,
             view_receivers: Vec::new(),
             view_casters: Vec::new(),
             view_keys: Vec::new(),
@@ -405,6 +407,23 @@ impl<'a> FrameFacts<'a> {
             _ => plan.receivers.len(),
         };
         Some(plan)
+    }
+
+    /// Of `receivers`, sorted, those whose bounds meet light `index`'s sphere enlarged by a
+    /// thousandth and one unit: rounding may put an interpolated fragment a hair outside its
+    /// surface's box, never that far.
+    fn in_range(&self, index: usize, receivers: &[u32]) -> Vec<u32> {
+        let l = &self.scene.lights[index];
+        let radius = l.radius * 1.001 + 1.0;
+        let mut out: Vec<u32> = receivers
+            .iter()
+            .copied()
+            .filter(|&s| {
+                cull::sphere_meets_aabb(l.position, radius, &self.scene.surfaces[s as usize].bounds)
+            })
+            .collect();
+        out.sort_unstable();
+        out
     }
 
     /// Light culling: the view frustum, then the visible leaves and receivers, then the

@@ -39,7 +39,7 @@ pub struct View {
 
 /// The options an error frame depends on: all but the sampling budget, which only says how
 /// many pixels the sample traces.
-fn error_key(options: &Options) -> String {
+pub(super) fn error_key(options: &Options) -> String {
     let mut o = options.clone();
     o.estimate.samples = 0;
     options_key(&o)
@@ -192,6 +192,7 @@ impl<'a> Bench<'a> {
             return Ok((error.clone(), sampled.clone().filter(|_| sample)));
         }
         let key = error_key(options);
+        self.error_frames += 1;
         // Frusta kept from the path's last frames are sized for another view: the first frame's
         // error is the configuration's own, not its history's.
         self.renderer.forget_kept_frusta();

@@ -39,15 +39,17 @@ impl Bench<'_> {
                 ),
             });
             let members: Vec<(String, Options)> = group.iter().map(|&i| timed[i].clone()).collect();
-            out.extend(self.measure_group(members)?);
+            out.extend(self.measure_group(members, g)?);
         }
         Ok(out)
     }
 
-    /// `timed` split into groups whose renderers' maps fit `memory_mb` together, in order;
-    /// a configuration stays with the baseline that follows it. A renderer's maps are the
-    /// first frame's, within `shadow_map.budget_mb` ([`crate::plan::map_memory`]); one that
-    /// alone holds more has a group of its own. One group without `memory_mb`.
+    /// `timed` split into groups whose renderers fit `memory_mb` together, in order; a
+    /// configuration stays with the baseline that follows it. A renderer holds what the same
+    /// options held after their frames in an earlier bench of the scene (maps, volumes and
+    /// fragments: `tune`'s rungs measured every finalist), else the first frame's maps,
+    /// within `shadow_map.budget_mb` ([`crate::plan::map_memory`]); one that alone holds more
+    /// has a group of its own. One group without `memory_mb`.
     fn groups(&self, timed: &[(String, Options)]) -> Vec<Vec<usize>> {
         let Some(limit) = self.settings.memory_mb else {
             return vec![(0..timed.len()).collect()];
@@ -55,9 +57,12 @@ impl Bench<'_> {
         let limit = (f64::from(limit) * 1048576.0) as u64;
         let scene = &self.scene;
         let camera = self.settings.camera(scene, 0);
-        let maps = |o: &Options| -> u64 {
+        let holds = |o: &Options| -> u64 {
             if o.technique == Technique::None {
                 return 0;
+            }
+            if let Some(&bytes) = self.held.get(&error::error_key(o)) {
+                return bytes;
             }
             let bytes = crate::plan::Plan::build_at(scene, &camera, o)
                 .stats
@@ -67,7 +72,7 @@ impl Bench<'_> {
         let mut groups: Vec<Vec<usize>> = Vec::new();
         let mut held = 0;
         for (i, (_, o)) in timed.iter().enumerate() {
-            let bytes = maps(o);
+            let bytes = holds(o);
             let fits = held + bytes <= limit || o.technique == Technique::None;
             match groups.last_mut() {
                 Some(g) if fits => g.push(i),
@@ -81,11 +86,12 @@ impl Bench<'_> {
         groups
     }
 
-    /// One group of option sets measured round-robin, each on a renderer of its own (dropped
-    /// at the end, with what it kept).
+    /// Group `group` of option sets measured round-robin, each on a renderer of its own
+    /// (dropped at the end, with what it kept).
     fn measure_group(
         &mut self,
         timed: Vec<(String, Options)>,
+        group: usize,
     ) -> Result<HashMap<String, Measured>, RenderError> {
         let (scene, settings) = (&mut self.scene, &self.settings);
         let mut renderers = Vec::with_capacity(timed.len());
@@ -123,6 +129,9 @@ impl Bench<'_> {
         {
             let mut m = pass_breakdown(r, scene, settings, &o, f)?;
             m.prepared = p;
+            m.held_bytes = r.held().bytes();
+            m.group = Some(group);
+            self.held.insert(error::error_key(&o), m.held_bytes);
             out.insert(key, m);
         }
         Ok(out)

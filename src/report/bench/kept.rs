@@ -3,13 +3,15 @@
 
 use super::{Bench, BenchConfig, BenchSettings, View, options_key};
 use crate::report::store::{RowStore, key, scene_fingerprint};
+use std::collections::HashMap;
 
-/// What one bench of a scene hands on to the next: the rows kept, and the exact masks and
-/// errors of its first view.
+/// What one bench of a scene hands on to the next: the rows kept, the exact masks and
+/// errors of its first view, and what each configuration's renderer held.
 #[derive(Default)]
 pub struct Kept {
     pub store: RowStore,
     pub view: View,
+    pub held: HashMap<String, u64>,
 }
 
 impl<'a> Bench<'a> {
@@ -38,6 +40,7 @@ impl<'a> Bench<'a> {
     pub fn put_kept(&mut self, kept: Kept) {
         self.put_store(kept.store);
         self.put_view(kept.view);
+        self.held.extend(kept.held);
     }
 
     /// Takes what this bench kept (for the next bench of the scene), leaving it none.
@@ -45,6 +48,7 @@ impl<'a> Bench<'a> {
         Kept {
             store: std::mem::take(&mut self.store),
             view: self.take_view(),
+            held: std::mem::take(&mut self.held),
         }
     }
 

@@ -67,9 +67,11 @@ pub struct BenchSettings {
     pub motion: bool,
     /// Sample every n-th measured frame against the sampled reference (1: every frame).
     pub sample_every: usize,
-    /// With `interleave`: the MiB the round-robin renderers' shadow maps may hold together;
-    /// the configurations are then timed a group at a time (each with its baseline), the
-    /// renderers of one group dropped before the next is made. None: all at once.
+    /// With `interleave`: the MiB the round-robin renderers may hold together (maps, volumes
+    /// and fragments, as an earlier bench of the same options measured them, else the first
+    /// frame's planned maps); the configurations are then timed a group at a time (each with
+    /// its baseline), the renderers of one group dropped before the next is made. None: all
+    /// at once.
     pub memory_mb: Option<f32>,
     /// On a still path (one pose, nothing moving): a configuration's measured frames stop
     /// once they add up to this many seconds (one frame at least), and its pipelined and
@@ -236,6 +238,14 @@ pub struct BenchRow {
     /// What was readied before the first frame, untimed (`plan.build_ahead`: lights whose
     /// kept volumes were built ahead, with their parts, vertices and milliseconds).
     pub prepared: Prepared,
+    /// Bytes the configuration's renderer held after its frames (`Held::bytes`: shadow maps,
+    /// volume buffers and their CPU copies, subdivision fragments).
+    #[serde(default)]
+    pub held_bytes: u64,
+    /// Round-robin: the group of renderers it was timed in (`memory_mb`), from 0; None one
+    /// after another.
+    #[serde(default)]
+    pub round_robin_group: Option<usize>,
     /// Milliseconds per frame with up to two frames in flight (throughput): the path drawn
     /// again back to back, bench waiting only for the frame before the one just sent (0 where
     /// `BenchSettings::pipelined` is off, or where one frame was measured: nothing is in
@@ -368,6 +378,10 @@ struct Measured {
     clock: &'static str,
     /// What was readied before the warm-up frames (`Renderer::prepare`).
     prepared: Prepared,
+    /// What the renderer held after the frames (`Held::bytes`).
+    held_bytes: u64,
+    /// The round-robin group it was timed in.
+    group: Option<usize>,
 }
 
 /// Where the timed frames waited for the GPU ([`Syncs`]), per frame on average.
@@ -580,6 +594,8 @@ fn pass_breakdown(
         passes: BTreeMap::new(),
         clock: "cpu",
         prepared: Prepared::default(),
+        held_bytes: 0,
+        group: None,
     };
     let frames = if settings.breakdown {
         timed.len().clamp(1, PASS_FRAMES)
@@ -619,6 +635,11 @@ pub struct Bench<'a> {
     store: RowStore,
     /// The scene's content as the store's keys name it (empty for a store of this bench only).
     fingerprint: String,
+    /// Bytes a renderer held after each configuration's frames (`Held::bytes`), by its
+    /// options (their sampling budget aside): what groups round-robin renderers.
+    held: HashMap<String, u64>,
+    /// Error frames drawn (those the view held are not).
+    error_frames: usize,
 }
 
 /// Where every model stands (its transform's bits) and in which pose.
@@ -645,6 +666,8 @@ impl<'a> Bench<'a> {
             posed_reference: None,
             store: RowStore::in_memory(),
             fingerprint: String::new(),
+            held: HashMap::new(),
+            error_frames: 0,
         }
     }
 
@@ -656,6 +679,12 @@ impl<'a> Bench<'a> {
     /// The scene as the bench last posed it.
     pub fn scene(&self) -> &Scene {
         &self.scene
+    }
+
+    /// Error frames this bench drew: one per configuration whose error (with its sample, where
+    /// sampled) no earlier bench of the view took.
+    pub fn error_frames(&self) -> usize {
+        self.error_frames
     }
 
     /// One configuration's frames on this bench's renderer. With `error` (whether to sample
@@ -702,6 +731,8 @@ impl<'a> Bench<'a> {
         }
         let mut m = pass_breakdown(self.renderer, scene, settings, options, &timed)?;
         m.prepared = prepared;
+        m.held_bytes = self.renderer.held().bytes();
+        self.held.insert(error::error_key(options), m.held_bytes);
         // The next configuration starts from the scene alone, not beside this one's maps
         // and volumes (a sweep's memory is then its largest configuration's, not their sum).
         self.renderer.release_kept();
@@ -899,6 +930,8 @@ impl<'a> Bench<'a> {
                 cpu_ms,
                 own_ms: stats(&m.own_ms),
                 prepared: m.prepared,
+                held_bytes: m.held_bytes,
+                round_robin_group: m.group,
                 pipelined_ms: m.pipelined_ms,
                 shadows_off_frame_ms: Median { median: off_ms },
                 ratio_to_shadows_off: if off_ms > 0.0 {
@@ -963,6 +996,8 @@ pub(crate) fn test_row(technique: &str, label: &str, ms: f64, error: f64) -> Ben
         cpu_ms: MsStats::default(),
         own_ms: MsStats::default(),
         prepared: Prepared::default(),
+        held_bytes: 0,
+        round_robin_group: None,
         pipelined_ms: ms,
         shadows_off_frame_ms: Median { median: 1.0 },
         ratio_to_shadows_off: ms,

@@ -227,6 +227,7 @@ impl Runner<'_> {
         let kept = Kept {
             store: std::mem::take(&mut self.store),
             view,
+            ..Kept::default()
         };
         let (settings, out, bar) = (self.settings, self.out, self.bar);
         let mut lab =
