@@ -11,7 +11,7 @@ const SM: &str = "technique=shadow_map";
 const SV: &str = "technique=shadow_volume";
 
 /// (feature, the options that need it, the fallback they must equal, options replaced)
-const CASES: [(&str, &[&str], &[&str], usize); 8] = [
+const CASES: [(&str, &[&str], &[&str], usize); 9] = [
     (
         "render_to_depth_texture",
         &[SM, "shadow_map.depth_source=fbo"],
@@ -66,6 +66,12 @@ const CASES: [(&str, &[&str], &[&str], usize); 8] = [
         "offset_per_fragment",
         &["technique=psm"],
         &["technique=psm", "shadow_map.offset_factor=10"],
+        1,
+    ),
+    (
+        "copy_buffer",
+        &[SV],
+        &[SV, "shadow_volume.relayout_on_gpu=false"],
         1,
     ),
 ];

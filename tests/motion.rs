@@ -244,11 +244,43 @@ fn in_motion_the_masks_equal_those_of_a_renderer_with_every_cache_off() {
     masks_equal_with_caches_off(in_place);
 }
 
+/// oa_dm1's benchmark flythrough.
+fn oa_dm1_path() -> Vec<PathKey> {
+    path::read(&std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/paths/oa_dm1.path"))
+        .unwrap()
+}
+
+#[test]
+fn volumes_laid_out_again_on_the_gpu_equal_those_built_afresh_in_motion() {
+    let (mut scene, _, _) = load_scene_file("oa_dm1");
+    let keys = oa_dm1_path();
+    // Without the clip test nothing reads an uploaded part's triangles: the CPU gives up every
+    // copy, and each new layout copies the parts it keeps from the light's old buffer.
+    let cached = options_with(&[SV, "width=320", "height=240", "plan.cull_clipped=false"]);
+    let fresh = caches_off(&cached);
+    let (_ctx, mut a) = common::gl_on(shadowlab::options::BackendChoice::Egl, &cached);
+    let mut b = a.sibling(cached.width, cached.height).unwrap();
+    a.load_scene(&scene).unwrap();
+    let (mut compared, mut moved) = (0, 0);
+    for i in (0..8).chain((8..60).step_by(4)) {
+        scene.pose_at(i as f64 / FRAME_RATE_HZ);
+        let camera = keys[i].apply(&scene.camera);
+        let (fa, n) = common::cached_against_fresh(
+            (&mut a, &mut b),
+            (&scene, &camera),
+            (&cached, &fresh),
+            &format!("frame {i}"),
+        );
+        compared += n;
+        moved += fa.volumes.iter().map(|v| v.parts_moved).sum::<usize>();
+    }
+    println!("{compared} masks compared, {moved} parts moved on the GPU");
+    assert!(compared > 40, "{compared} masks compared");
+    assert!(moved > 100, "{moved} parts moved on the GPU");
+}
+
 fn masks_equal_with_caches_off(mut scene: Scene) {
-    let keys: Vec<PathKey> = path::read(
-        &std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/paths/oa_dm1.path"),
-    )
-    .unwrap();
+    let keys = oa_dm1_path();
     for technique in [SM, SV] {
         let cached = options_with(&[technique, "width=320", "height=240"]);
         let fresh = caches_off(&cached);

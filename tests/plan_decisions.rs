@@ -15,7 +15,7 @@ use shadowlab::options::{Options, Technique};
 use shadowlab::plan::occlusion::DepthPyramid;
 use shadowlab::plan::planner::{DepthNeed, Planner};
 use shadowlab::plan::scissor::{Scissor, points_scissor};
-use shadowlab::plan::volume_draws::{PartRange, PieceId, VolumeDraw, VolumeStats};
+use shadowlab::plan::volume_draws::{PartRange, PieceId, Span, VolumeDraw, VolumeStats};
 use shadowlab::plan::{LightPlan, PartTriangles, Plan, VolumePart};
 use shadowlab::scene::shapes::{MeshData, cuboid};
 use shadowlab::scene::{
@@ -255,7 +255,7 @@ fn frame(
         parts: lv.parts.clone(),
         draws: lv.draws.clone(),
         stats: lv.stats,
-        uploads_vertices: lv.upload.meshes.is_some(),
+        uploads_vertices: lv.upload.spans.is_some(),
         plan,
         need,
     }
@@ -950,6 +950,68 @@ fn volume_draws_are_reused_until_a_light_or_a_model_moves() {
     let again = frame(&mut planner, &scene, &camera, &o, None);
     assert!(!again.stats.draws_reused);
     assert_eq!((again.stats.parts_built, again.stats.parts_reused), (0, 2));
+}
+
+/// Guards `shadow_volume.relayout_on_gpu`: once a light's upload is made, the planner gives up
+/// its CPU copies of the parts (nothing reads them without `plan.cull_clipped`), and a later
+/// layout names a part it still draws by its place in the old buffer (copied on the GPU),
+/// writing only the part built again. With the clip test, or with the switch off, the copies
+/// stay (within `shadow_volume.kept_mb`). Made to fail: with no copy given up, both parts were
+/// written again from the CPU.
+#[test]
+fn a_part_given_up_on_the_cpu_is_laid_out_again_from_the_gpu() {
+    let held_after_moving = |sets: &[&str]| {
+        let mut scene = model_scene();
+        let camera = far_camera();
+        let o = options(sets);
+        let mut planner = Planner::default();
+        frame(&mut planner, &scene, &camera, &o, None);
+        planner.uploaded(0);
+        let moved = Mat4::from_translation(Vec3::new(30.0, 10.0, 20.0));
+        shadowlab::viewer::edit::move_model(&mut scene, 0, moved);
+        let model_moved = frame(&mut planner, &scene, &camera, &o, None);
+        assert_eq!(
+            (
+                model_moved.stats.parts_built,
+                model_moved.stats.parts_reused
+            ),
+            (1, 1)
+        );
+        let lv = planner.last_volume_draws(0).expect("prepared");
+        let spans = lv.upload.spans.clone().expect("an upload");
+        planner.uploaded(0);
+        (spans, planner.held_volumes().2)
+    };
+    let written = |spans: &[Span]| {
+        spans
+            .iter()
+            .filter(|s| matches!(s, Span::Written(_)))
+            .count()
+    };
+    let (spans, bytes) = held_after_moving(&["plan.cull_clipped=false"]);
+    // The model's part built again and written; the world box's taken from the buffer.
+    assert_eq!(spans.len(), 2, "{spans:?}");
+    assert_eq!(written(&spans), 1, "{spans:?}");
+    // Given up this frame: only the part just built is still on the CPU, until the next
+    // prepare.
+    let (_, one_part) = held_after_moving(&[
+        "plan.cull_clipped=false",
+        "shadow_volume.relayout_on_gpu=false",
+    ]);
+    assert!(
+        bytes < one_part,
+        "{bytes} bytes held, {one_part} with the copies kept"
+    );
+    for kept in [
+        &["plan.cull_clipped=true"][..],
+        &[
+            "plan.cull_clipped=false",
+            "shadow_volume.relayout_on_gpu=false",
+        ],
+    ] {
+        let (spans, _) = held_after_moving(kept);
+        assert_eq!(written(&spans), spans.len(), "{kept:?}: {spans:?}");
+    }
 }
 
 /// Guards the caster groups' key (the scene's revision): the same groups while the scene's

@@ -304,6 +304,7 @@ pub fn probe(gl: &glow::Context, fb_depth_stencil: (i32, i32)) -> Caps {
     features.extend(drawn_features(&c));
     features.extend(depth_texture_features(&c));
     features.extend(shader_features(&c, clip_shaders, max_clip_distances));
+    features.push(copy_buffer_feature(&c));
     clear_errors(gl);
     Caps {
         vendor,
@@ -371,6 +372,20 @@ fn profile_name(c: &Probing) -> &'static str {
     } else {
         "unknown"
     }
+}
+
+/// Copies between buffers, which lay a light's volume buffer out again on the GPU.
+fn copy_buffer_feature(c: &Probing) -> Feature {
+    feature(
+        "copy_buffer",
+        c.es || c.at_least(3, 1) || c.has_ext("GL_ARB_copy_buffer"),
+        if c.es {
+            "glCopyBufferSubData (ES 3.0)"
+        } else {
+            "glCopyBufferSubData (GL 3.1, GL_ARB_copy_buffer)"
+        },
+        "the CPU keeps copies of uploaded volume parts (shadow_volume.relayout_on_gpu off)",
+    )
 }
 
 /// The stencil operations and depth tests shadow volumes use.

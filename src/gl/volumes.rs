@@ -3,7 +3,7 @@
 //! what to draw; this module holds the buffers and uploads.
 
 use super::upload::{Buffers, buffer_data, buffer_sub_data};
-use crate::plan::volume_draws::{LightVolumeDraws, PartRange, VolumeDraw};
+use crate::plan::volume_draws::{LightVolumeDraws, PartRange, VertexSpan, VolumeDraw};
 use glow::HasContext;
 use std::collections::HashMap;
 
@@ -32,35 +32,97 @@ impl LightVolumes<'_> {
 /// small components, each a call of its own otherwise.
 const BATCH_VERTICES: usize = 65536;
 
-/// Writes `meshes` one after another into the bound array buffer from vertex `at` on, small
-/// ones gathered into batches, large ones directly.
-fn write_batched<'a>(gl: &glow::Context, at: usize, meshes: impl Iterator<Item = &'a [[f32; 4]]>) {
-    let vertex_bytes = std::mem::size_of::<[f32; 4]>();
-    let mut batch: Vec<[f32; 4]> = Vec::new();
-    // The vertex the batch starts at, and the one the next mesh starts at.
-    let (mut batch_at, mut next) = (at, at);
-    let flush = |batch: &mut Vec<[f32; 4]>, batch_at: usize| {
-        if !batch.is_empty() {
-            buffer_sub_data(gl, glow::ARRAY_BUFFER, batch_at * vertex_bytes, batch);
-            batch.clear();
+/// Small meshes gathered into one write of the bound array buffer, large ones written
+/// directly.
+struct Batched {
+    vertices: Vec<[f32; 4]>,
+    /// The vertex the batch starts at.
+    at: usize,
+}
+
+impl Batched {
+    const VERTEX_BYTES: usize = std::mem::size_of::<[f32; 4]>();
+
+    /// Writes `mesh` at vertex `at` (right after what is gathered, or anywhere after a flush).
+    fn write(&mut self, gl: &glow::Context, at: usize, mesh: &[[f32; 4]]) {
+        if mesh.is_empty() {
+            return;
         }
-    };
-    for mesh in meshes {
-        if batch.len() + mesh.len() > BATCH_VERTICES {
-            flush(&mut batch, batch_at);
-            batch_at = next;
+        if self.vertices.len() + mesh.len() > BATCH_VERTICES || self.at + self.vertices.len() != at
+        {
+            self.flush(gl);
+            self.at = at;
         }
         if mesh.len() >= BATCH_VERTICES {
-            if !mesh.is_empty() {
-                buffer_sub_data(gl, glow::ARRAY_BUFFER, next * vertex_bytes, mesh);
-            }
-            batch_at = next + mesh.len();
+            buffer_sub_data(gl, glow::ARRAY_BUFFER, at * Self::VERTEX_BYTES, mesh);
+            self.at = at + mesh.len();
         } else {
-            batch.extend_from_slice(mesh);
+            self.vertices.extend_from_slice(mesh);
         }
-        next += mesh.len();
     }
-    flush(&mut batch, batch_at);
+
+    fn flush(&mut self, gl: &glow::Context) {
+        if !self.vertices.is_empty() {
+            buffer_sub_data(
+                gl,
+                glow::ARRAY_BUFFER,
+                self.at * Self::VERTEX_BYTES,
+                &self.vertices,
+            );
+            self.at += self.vertices.len();
+            self.vertices.clear();
+        }
+    }
+}
+
+/// Writes `spans` into the bound array buffer from vertex `at` on; a moved span is copied
+/// from `old` (the light's buffer before this upload allocated a new one), or, without
+/// one, lies where it is.
+fn write_spans<'a>(
+    gl: &glow::Context,
+    mut at: usize,
+    spans: impl Iterator<Item = VertexSpan<'a>>,
+    old: Option<glow::Buffer>,
+) -> Result<(), String> {
+    let vertex_bytes = Batched::VERTEX_BYTES;
+    let mut batch = Batched {
+        vertices: Vec::new(),
+        at,
+    };
+    for span in spans {
+        match span {
+            VertexSpan::Written(mesh) => {
+                batch.write(gl, at, mesh);
+                at += mesh.len();
+            }
+            VertexSpan::Moved { from, vertices } => {
+                match old {
+                    // SAFETY: copies between two of the light's buffers, within the sizes
+                    // the planner allocated them with.
+                    Some(old) => unsafe {
+                        gl.bind_buffer(glow::COPY_READ_BUFFER, Some(old));
+                        gl.copy_buffer_sub_data(
+                            glow::COPY_READ_BUFFER,
+                            glow::ARRAY_BUFFER,
+                            (from * vertex_bytes) as i32,
+                            (at * vertex_bytes) as i32,
+                            (vertices * vertex_bytes) as i32,
+                        );
+                        gl.bind_buffer(glow::COPY_READ_BUFFER, None);
+                    },
+                    None if from == at => {}
+                    None => {
+                        return Err(format!(
+                            "a volume part at vertex {from} moved to {at} within its buffer"
+                        ));
+                    }
+                }
+                at += vertices;
+            }
+        }
+    }
+    batch.flush(gl);
+    Ok(())
 }
 
 /// Every light's volume buffers.
@@ -72,33 +134,47 @@ pub struct VolumeBuffers {
 }
 
 impl VolumeBuffers {
-    /// Uploads what `draws` asks for into the light's buffers (made on first use).
+    /// Uploads what `draws` asks for into the light's buffers (made on first use). An
+    /// allocation makes a new vertex buffer, into which the parts still in the old one are
+    /// copied before it is deleted.
     pub fn upload(&mut self, gl: &glow::Context, draws: &LightVolumeDraws) -> Result<(), String> {
         let b = match self.lights.entry(draws.light) {
             std::collections::hash_map::Entry::Occupied(e) => e.into_mut(),
             std::collections::hash_map::Entry::Vacant(e) => e.insert(Buffers::new(gl)?),
         };
         let up = &draws.upload;
-        if let Some(meshes) = draws.upload_vertices() {
+        if let Some(spans) = draws.upload_spans() {
             let vertex_bytes = std::mem::size_of::<[f32; 4]>();
             // SAFETY: uploads plain f32 vertices; attribute 0 is a vec4 position. The planner
             // allocates before writing past what the buffer holds (`VolumeUpload::allocate`).
             unsafe {
                 gl.bind_vertex_array(Some(b.vao));
-                gl.bind_buffer(glow::ARRAY_BUFFER, Some(b.vbo));
-                if let Some(n) = up.allocate {
-                    self.sizes.entry(draws.light).or_default().0 = (n * vertex_bytes) as u64;
-                    gl.buffer_data_size(
-                        glow::ARRAY_BUFFER,
-                        (n * vertex_bytes) as i32,
-                        glow::DYNAMIC_DRAW,
-                    );
-                    gl.enable_vertex_attrib_array(0);
-                    gl.vertex_attrib_pointer_f32(0, 4, glow::FLOAT, false, 16, 0);
-                }
-                write_batched(gl, up.at, meshes);
+                let old = match up.allocate {
+                    Some(n) => {
+                        let fresh = gl.create_buffer()?;
+                        gl.bind_buffer(glow::ARRAY_BUFFER, Some(fresh));
+                        self.sizes.entry(draws.light).or_default().0 = (n * vertex_bytes) as u64;
+                        gl.buffer_data_size(
+                            glow::ARRAY_BUFFER,
+                            (n * vertex_bytes) as i32,
+                            glow::DYNAMIC_DRAW,
+                        );
+                        gl.enable_vertex_attrib_array(0);
+                        gl.vertex_attrib_pointer_f32(0, 4, glow::FLOAT, false, 16, 0);
+                        Some(std::mem::replace(&mut b.vbo, fresh))
+                    }
+                    None => {
+                        gl.bind_buffer(glow::ARRAY_BUFFER, Some(b.vbo));
+                        None
+                    }
+                };
+                let written = write_spans(gl, up.at, spans, old);
                 gl.bind_vertex_array(None);
                 gl.bind_buffer(glow::ARRAY_BUFFER, None);
+                if let Some(old) = old {
+                    gl.delete_buffer(old);
+                }
+                written?;
             }
         }
         if let Some(indices) = &draws.upload.indices {

@@ -542,13 +542,20 @@ define_options! {
         /// frame (`plan.enabled = false`) it also keeps a light's draws whole while nothing
         /// they are made from changed (what `plan.reuse_volume_draws` does for the planner).
         caching: bool = true;
-        /// Memory for kept volume parts, in MiB (each held on the CPU and in the GPU's
-        /// buffer): a still light's pieces of still casters are built once against every
-        /// receiver in its range and kept while out of view; beyond this the least recently
-        /// planned are dropped. The CPU's copies of the other parts drawn (in the GPU's buffer
-        /// already) are held within as much again, least recently planned dropped first: a
-        /// light whose draws change then builds them again.
+        /// Memory for kept volume parts, in MiB (of vertices in the GPU's buffer): a still
+        /// light's pieces of still casters are built once against every receiver in its range
+        /// and kept while out of view; beyond this the least recently planned are dropped.
+        /// The CPU's copies of uploaded parts are held within as much again (least recently
+        /// planned given up first) where `plan.cull_clipped` reads their triangles, and not
+        /// at all elsewhere under `relayout_on_gpu`.
         kept_mb: f32 = 256.0, in 0.0 ..= 65536.0;
+        /// Lay a light's volume buffer out again on the GPU: a part already uploaded is
+        /// copied from its old place (glCopyBufferSubData) into the new layout, so the CPU
+        /// gives up its copy once the upload is made (the paper's frame of oa_dm3 held
+        /// 268 MB of such copies beside 645 MB of buffers). Off: the CPU keeps copies within
+        /// `kept_mb`, and a part whose copy was given up is built again when the layout
+        /// changes. Without glCopyBufferSubData (GL 3.1, `GL_ARB_copy_buffer`) it is off.
+        relayout_on_gpu: bool = true;
         /// Whose volumes the GPU extrudes (with infinite extrusion and the shader pipeline;
         /// elsewhere the CPU builds them all). Those volumes are whole caster groups, counted
         /// depth-fail, without the planner's per-piece culling, truncation, scissors or depth

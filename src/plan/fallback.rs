@@ -10,7 +10,7 @@ use crate::options::{
 use serde::Serialize;
 
 /// The features `gl.disable` may name (those a fallback exists for).
-pub const FEATURES: [&str; 12] = [
+pub const FEATURES: [&str; 13] = [
     "render_to_depth_texture",
     "depth_copy",
     "depth_read",
@@ -23,6 +23,7 @@ pub const FEATURES: [&str; 12] = [
     "depth_bounds",
     "primitive_id",
     "offset_per_fragment",
+    "copy_buffer",
 ];
 
 /// The slope factor maps fitted tightly in depth take where the GL adds the polygon offset per
@@ -165,6 +166,15 @@ pub fn resolve(options: &Options, has: impl Fn(&str) -> bool) -> (Options, Vec<F
     if !has("stencil_wrap") && o.shadow_volume.wrap == StencilWrap::Wrap {
         fall("stencil_wrap", "shadow_volume.wrap", &mut o, "saturate");
     }
+    // Without copies between buffers the CPU keeps the uploaded volume parts it lays out.
+    if !has("copy_buffer") && o.shadow_volume.relayout_on_gpu {
+        fall(
+            "copy_buffer",
+            "shadow_volume.relayout_on_gpu",
+            &mut o,
+            "false",
+        );
+    }
     (o, taken)
 }
 
@@ -247,6 +257,9 @@ mod tests {
                 "shadow_volume.wrap"
             ]
         );
+        let (o, keys) = options_of("copy_buffer");
+        assert!(!o.shadow_volume.relayout_on_gpu);
+        assert_eq!(keys, ["shadow_volume.relayout_on_gpu"]);
     }
 
     #[test]

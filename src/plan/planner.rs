@@ -302,9 +302,14 @@ impl Planner {
         let truncate = p.truncate_volumes;
         let mut made = Vec::new();
         for light in lights {
-            let ahead =
+            let made_ahead =
                 self.volumes
                     .prepare_ahead(scene, &groups, light, &options.shadow_volume, truncate);
+            let Ok(ahead) = made_ahead else {
+                // A layout bug: the light is built when first seen, where the frame says so.
+                self.volumes.forget_light(light);
+                continue;
+            };
             if self.volumes.kept_vertices() > budget {
                 // Past the budget: this light is built when first seen, as without building ahead.
                 self.volumes.forget_light(light);

@@ -2,9 +2,8 @@
 //! first sight of a room then builds nothing, where it would otherwise build every piece its
 //! lights draw there in one frame.
 
-use super::parts::with_headroom;
 use super::pieces::light_in_group;
-use super::{LightVolumeDraws, Piece, PieceId, VolumePlanner, VolumeStats, VolumeUpload};
+use super::{Piece, PieceId, VolumeDrawError, VolumePlanner, VolumeStats};
 use crate::options::ShadowVolumeOptions;
 use crate::plan::cull;
 use crate::scene::{Scene, SurfaceOwner};
@@ -26,7 +25,8 @@ impl VolumePlanner {
     /// range whose shadow meets a receiver there, as a frame planning that chunk would build
     /// it (the same key: such a frame reuses it), and readies the whole kept region of the
     /// light's buffer for upload ([`LightVolumeDraws::upload`]), so that the frame uploads
-    /// only what follows it. `truncate`: `plan.truncate_volumes`.
+    /// only what follows it. `truncate`: `plan.truncate_volumes`. An error is a layout bug:
+    /// the light is then best forgotten.
     pub fn prepare_ahead(
         &mut self,
         scene: &Scene,
@@ -34,7 +34,7 @@ impl VolumePlanner {
         light: usize,
         o: &ShadowVolumeOptions,
         truncate: bool,
-    ) -> Ahead {
+    ) -> Result<Ahead, VolumeDrawError> {
         self.clock += 1;
         let lv = self.lights.entry(light).or_default();
         lv.light = light;
@@ -50,12 +50,12 @@ impl VolumePlanner {
             (l.position, o, true, truncate),
             (self.clock, &mut stats),
         );
-        let vertices = lv.ready_kept_region();
-        Ahead {
+        let vertices = lv.ready_kept_region()?;
+        Ok(Ahead {
             light,
             parts: stats.parts_built,
             vertices,
-        }
+        })
     }
 
     /// Vertices of every light's kept parts together (what `shadow_volume.kept_mb` bounds).
@@ -64,36 +64,16 @@ impl VolumePlanner {
             .values()
             .flat_map(|l| l.meshes.values())
             .filter(|c| c.kept)
-            .map(|c| c.mesh.vertices.len())
+            .map(|c| c.len())
             .sum()
     }
 
     /// The light's upload was made: its vertices need not be held for it any longer, and the
-    /// CPU copies of its drawn parts may be evicted.
+    /// CPU copies of its parts may be given up or evicted.
     pub fn uploaded(&mut self, light: usize) {
         if let Some(lv) = self.lights.get_mut(&light) {
-            lv.upload = VolumeUpload::default();
+            lv.upload_made();
         }
-    }
-}
-
-impl LightVolumeDraws {
-    /// The upload of the whole kept region, allocated with room for the parts a frame adds
-    /// after it, noted as what the buffer holds; returns its vertices.
-    fn ready_kept_region(&mut self) -> usize {
-        let kept = self.kept_region();
-        let allocate = with_headroom(kept.vertices);
-        self.kept_layout = kept.hash;
-        self.capacity = allocate;
-        // No frame's layout yet: the first frame writes what follows the kept region.
-        self.layout = 0;
-        self.upload = VolumeUpload {
-            meshes: Some(kept.meshes),
-            at: 0,
-            allocate: Some(allocate),
-            indices: None,
-        };
-        kept.vertices
     }
 }
 

@@ -22,8 +22,10 @@
 mod ahead;
 mod parts;
 mod pieces;
+mod upload;
 
 pub use ahead::Ahead;
+pub use upload::{PartId, Span, VertexSpan, VolumeUpload};
 
 use parts::{check_bounds, draws_of};
 use pieces::{merge, plan_pieces, visible_receivers};
@@ -56,6 +58,8 @@ pub enum VolumeDrawError {
     },
     #[error("light {light}: a volume index points past the {vertices} vertices uploaded")]
     IndexPastBuffer { light: usize, vertices: usize },
+    #[error("light {light}: a volume part laid out is held neither on the CPU nor in its buffer")]
+    PartNotHeld { light: usize },
 }
 
 /// What one light's volumes cost, for stats and reports.
@@ -117,6 +121,10 @@ pub struct VolumeStats {
     /// Parts built this frame, and parts reused from earlier frames.
     pub parts_built: usize,
     pub parts_reused: usize,
+    /// Parts copied on the GPU from their old place in the light's buffer into its new
+    /// layout (their CPU copies were given up: `shadow_volume.relayout_on_gpu`).
+    #[serde(default)]
+    pub parts_moved: usize,
     /// The last frame's draws, drawn as they were: nothing they are made from changed
     /// (`plan.reuse_volume_draws`); the other counts are theirs.
     pub draws_reused: bool,
@@ -268,7 +276,13 @@ fn plan_hash(lp: &LightPlan) -> u64 {
 
 struct CachedPart {
     key: u64,
+    /// The part's geometry; its vertices are given up (left empty) once the light's buffer
+    /// holds them, where `shadow_volume.relayout_on_gpu` and the budget say.
     mesh: volume::VolumeMesh,
+    /// Vertices of the mesh, held on the CPU or not.
+    vertices: usize,
+    /// The vertex the part starts at in the light's buffer, as last uploaded.
+    at: Option<usize>,
     /// The boxes of the mesh's blocks of triangles, for `plan.cull_clipped`.
     blocks: Vec<Option<Aabb>>,
     /// Built against the light's whole range with both caps, and kept while not drawn (see
@@ -405,6 +419,8 @@ pub struct LightVolumeDraws {
     /// the GPU buffer was last allocated for.
     kept_layout: u64,
     capacity: usize,
+    /// Where the pending upload places each part of the layout (applied once it is made).
+    placed: Vec<(PartId, usize)>,
 }
 
 /// The boxes of every receiver in a light's range, in view or not: kept pieces are built
@@ -419,22 +435,6 @@ struct RangeReceivers {
     /// model stands for it by that box while it stays inside, so that its motion changes
     /// nothing kept.
     reach: Option<Vec<Option<Aabb>>>,
-}
-
-/// The buffers a light's draws need this frame (None: what was uploaded before still holds).
-#[derive(Debug, Clone, Default, PartialEq)]
-pub struct VolumeUpload {
-    /// The meshes whose vertices go into the buffer, in buffer order from vertex `at` on:
-    /// every part's, or those after the kept parts when only the others changed
-    /// ([`LightVolumeDraws::upload_vertices`] gives their vertices). Named, not copied: a copy
-    /// of every light's volumes for the upload was a third of the paper's frame's memory
-    /// (oa_dm3: 515 MB beside the meshes' 764 MB).
-    pub meshes: Option<Vec<(usize, PieceId)>>,
-    pub at: usize,
-    /// Allocate the vertex buffer for this many vertices first (its contents are lost).
-    pub allocate: Option<usize>,
-    /// The index list of the parts drawn through one (`plan.cull_clipped`).
-    pub indices: Option<Vec<u32>>,
 }
 
 /// Every light's volume draws, with the caches they are made from: the planner owns them.
@@ -473,7 +473,7 @@ struct Layout {
 
 impl VolumePlanner {
     /// Volume parts kept for later frames, all lights together, depth fits kept, and the
-    /// bytes of the parts' vertices.
+    /// bytes of the parts' vertices the CPU holds.
     pub fn held(&self) -> (usize, usize, u64) {
         let parts = self.lights.values().map(|l| l.meshes.len()).sum();
         let vertices: usize = self
@@ -582,7 +582,7 @@ impl VolumePlanner {
         );
         // Before the layout: the upload names the laid-out meshes, which must all still be
         // here when the GL layer copies them (this prepare's parts are never evicted).
-        self.evict(o.kept_mb);
+        self.evict(o, choices.cull_clipped);
         let lv = self.lights.get_mut(&lp.light).expect("made above");
         let layout = lv.lay_out(
             &drawn_pieces,
@@ -595,11 +595,19 @@ impl VolumePlanner {
         stats.rebuilt = stats.parts_built > 0;
         let draws = draws_of(&layout.parts);
         check_bounds(lp.light, &draws, &layout.indices, layout.vertex_count)?;
-        let vertices = lv.upload_for(&layout, stats.rebuilt);
+        let vertices = lv.upload_for(&layout, stats.rebuilt)?;
+        // Without a new buffer a part given up lies where it is: nothing is copied.
+        stats.parts_moved = vertices
+            .as_ref()
+            .filter(|v| v.allocate.is_some())
+            .map_or(0, |v| {
+                let moved = |s: &&Span| matches!(s, Span::Moved { .. });
+                v.spans.iter().filter(moved).count()
+            });
         lv.upload = VolumeUpload {
             at: vertices.as_ref().map_or(0, |v| v.at),
             allocate: vertices.as_ref().and_then(|v| v.allocate),
-            meshes: vertices.map(|v| v.meshes),
+            spans: vertices.map(|v| v.spans),
             indices: (!layout.indices.is_empty()).then_some(layout.indices),
         };
         stats.build_ms = start.elapsed().as_secs_f64() * 1e3;
@@ -611,19 +619,31 @@ impl VolumePlanner {
     }
 
     /// Drops the least recently planned kept parts, of every light, until those kept hold at
-    /// most `budget_mb` of vertices (each is held twice: here and in the GPU's buffer); then
-    /// the CPU copies of drawn parts ([`VolumePlanner::evict_copies`]). Parts planned by the
-    /// latest prepare stay.
-    fn evict(&mut self, budget_mb: f32) {
+    /// most `shadow_volume.kept_mb` of vertices; then gives up CPU copies of uploaded parts
+    /// (see `shadow_volume.relayout_on_gpu`): past as much again where `cull_clipped` reads
+    /// their triangles, all of them where nothing does. Parts planned by the latest prepare
+    /// stay.
+    fn evict(&mut self, o: &ShadowVolumeOptions, cull_clipped: bool) {
         let vertex_bytes = std::mem::size_of::<[f32; 4]>();
-        let budget = (f64::from(budget_mb) * 1048576.0 / vertex_bytes as f64) as usize;
+        let budget = (f64::from(o.kept_mb) * 1048576.0 / vertex_bytes as f64) as usize;
         self.evict_kept(budget);
-        self.evict_copies(budget);
+        if o.relayout_on_gpu {
+            self.give_up_copies(if cull_clipped { budget } else { 0 });
+        } else {
+            self.evict_copies(budget);
+        }
     }
 
     /// Kept parts past `budget` vertices, least recently planned first.
     fn evict_kept(&mut self, budget: usize) {
-        self.evict_where(budget, |_, c| c.kept);
+        self.evict_where(
+            budget,
+            true,
+            |_, c| if c.kept { c.len() } else { 0 },
+            |lv, id| {
+                lv.meshes.remove(&id);
+            },
+        );
     }
 
     /// Unkept parts past `budget` vertices, least recently planned first, among lights whose
@@ -632,22 +652,56 @@ impl VolumePlanner {
     /// them again. Without it the paper's frame held every light's volumes twice (oa_dm3:
     /// 764 MB here beside 645 MB in the buffers).
     fn evict_copies(&mut self, budget: usize) {
-        self.evict_where(budget, |lv, c| !c.kept && lv.upload.meshes.is_none());
+        self.evict_where(
+            budget,
+            true,
+            |lv, c| {
+                let counted = !c.kept && lv.upload.spans.is_none();
+                if counted { c.len() } else { 0 }
+            },
+            |lv, id| {
+                lv.meshes.remove(&id);
+            },
+        );
     }
 
-    /// The parts `counted` picks, least recently planned first, dropped until those it picks
-    /// hold at most `budget` vertices; parts planned by the latest prepare stay.
+    /// The CPU copies of uploaded parts past `budget` vertices given up, least recently
+    /// planned first, among lights whose upload is made: the light's buffer holds them, and a
+    /// later layout copies them from there (`shadow_volume.relayout_on_gpu`). The latest
+    /// prepare's parts too: where it lays them out they are taken from the buffer.
+    fn give_up_copies(&mut self, budget: usize) {
+        self.evict_where(
+            budget,
+            false,
+            |lv, c| {
+                let copy = c.on_cpu() && c.at.is_some() && lv.upload.spans.is_none();
+                if copy { c.len() } else { 0 }
+            },
+            |lv, id| {
+                if let Some(c) = lv.meshes.get_mut(&id) {
+                    c.mesh.vertices = Vec::new();
+                }
+            },
+        );
+    }
+
+    /// The parts `weight` counts (their vertices; 0: not counted), least recently planned
+    /// first, handed to `drop` until those counted hold at most `budget` vertices; with
+    /// `spare_latest`, parts planned by the latest prepare stay.
     fn evict_where(
         &mut self,
         budget: usize,
-        counted: impl Fn(&LightVolumeDraws, &CachedPart) -> bool,
+        spare_latest: bool,
+        weight: impl Fn(&LightVolumeDraws, &CachedPart) -> usize,
+        drop: impl Fn(&mut LightVolumeDraws, PartId),
     ) {
+        let weight = &weight;
         let parts = || {
-            self.lights.iter().flat_map(|(&light, lv)| {
+            self.lights.iter().flat_map(move |(&light, lv)| {
                 lv.meshes
                     .iter()
-                    .filter(|(_, c)| counted(lv, c))
-                    .map(move |(&id, c)| (c.used, light, id, c.mesh.vertices.len()))
+                    .map(move |(&id, c)| (c.used, light, id, weight(lv, c)))
+                    .filter(|k| k.3 > 0)
             })
         };
         // Within the budget (every frame but those that fill it) nothing is listed or sorted.
@@ -655,14 +709,14 @@ impl VolumePlanner {
         if held <= budget {
             return;
         }
-        let mut listed: Vec<(u64, usize, (usize, PieceId), usize)> = parts().collect();
+        let mut listed: Vec<(u64, usize, PartId, usize)> = parts().collect();
         listed.sort_unstable_by_key(|k| (k.0, k.1, k.2));
         for (used, light, id, vertices) in listed {
-            if held <= budget || used >= self.clock {
+            if held <= budget || (spare_latest && used >= self.clock) {
                 break;
             }
             if let Some(lv) = self.lights.get_mut(&light) {
-                lv.meshes.remove(&id);
+                drop(lv, id);
                 held -= vertices;
             }
         }

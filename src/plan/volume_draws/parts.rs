@@ -125,6 +125,7 @@ impl LightVolumeDraws {
         let s = &mut self.stats;
         s.parts_reused += s.parts_built;
         s.parts_built = 0;
+        s.parts_moved = 0;
         s.rebuilt = false;
         s.build_ms = 0.0;
         s.draws_reused = true;
@@ -153,7 +154,7 @@ impl LightVolumeDraws {
             // view) are hashed by index and collected only when it is built.
             let (near, receivers_key) = if p.kept {
                 let unchanged = self.meshes.get(&(p.group, p.id)).is_some_and(|c| {
-                    o.caching && c.kept && c.base == base && c.range == self.range.hash
+                    o.caching && c.kept && c.base == base && c.range == self.range.hash && c.held()
                 });
                 if unchanged {
                     let c = self.meshes.get_mut(&(p.group, p.id)).expect("just found");
@@ -194,7 +195,7 @@ impl LightVolumeDraws {
             let key = part_key(light, o, p, &p.model, receivers_key);
             let cached = self.meshes.get_mut(&(p.group, p.id));
             match cached {
-                Some(c) if o.caching && c.key == key => {
+                Some(c) if o.caching && c.key == key && c.held() => {
                     c.used = clock;
                     c.range = self.range.hash;
                     stats.parts_reused += 1;
@@ -210,6 +211,8 @@ impl LightVolumeDraws {
                         CachedPart {
                             key,
                             blocks: block_bounds(&part.vertices),
+                            vertices: part.vertices.len(),
+                            at: None,
                             mesh: part,
                             kept: p.kept,
                             base,
@@ -295,7 +298,7 @@ impl LightVolumeDraws {
         for id in &meshes {
             let cached = &self.meshes[id];
             cached.key.hash(&mut h);
-            vertices += cached.mesh.vertices.len();
+            vertices += cached.len();
         }
         vertices.hash(&mut h);
         KeptRegion {
@@ -304,53 +307,6 @@ impl LightVolumeDraws {
             hash: h.finish(),
         }
     }
-
-    /// The vertices of the layout's meshes from mesh `from` on, in order.
-    /// The upload's vertices (`vec4`, w = 0 at infinity), mesh by mesh in buffer order from
-    /// `upload.at` on; None when nothing is to be uploaded.
-    pub fn upload_vertices(&self) -> Option<impl Iterator<Item = &[[f32; 4]]>> {
-        let meshes = self.upload.meshes.as_ref()?;
-        Some(
-            meshes
-                .iter()
-                .map(|id| self.meshes[id].mesh.vertices.as_slice()),
-        )
-    }
-
-    /// What to upload for `layout`: nothing while the buffer holds it; the vertices after the
-    /// kept region while that region is as uploaded and the buffer is large enough; else the
-    /// whole buffer, allocated with room to grow (a kept part seen for the first time then
-    /// does not reallocate it every frame).
-    pub(super) fn upload_for(&mut self, layout: &Layout, rebuilt: bool) -> Option<VertexUpload> {
-        let kept_same = layout.kept_hash == self.kept_layout;
-        let changed = layout.hash != self.layout || rebuilt;
-        let upload = if !kept_same || layout.vertex_count > self.capacity {
-            let allocate = with_headroom(layout.vertex_count);
-            self.capacity = allocate;
-            Some(VertexUpload {
-                meshes: layout.order.clone(),
-                at: 0,
-                allocate: Some(allocate),
-            })
-        } else if changed {
-            Some(VertexUpload {
-                meshes: layout.order[layout.kept_meshes..].to_vec(),
-                at: layout.kept_vertices,
-                allocate: None,
-            })
-        } else {
-            None
-        };
-        self.kept_layout = layout.kept_hash;
-        self.layout = layout.hash;
-        upload
-    }
-}
-
-/// The vertices a light's buffer is allocated for when it must hold `vertices`: room to grow,
-/// so that a kept part seen for the first time does not reallocate it every frame.
-pub(super) fn with_headroom(vertices: usize) -> usize {
-    vertices + vertices / 4 + 1024
 }
 
 /// The kept region of a light's buffer (see [`LightVolumeDraws::kept_region`]).
@@ -358,14 +314,6 @@ pub(super) struct KeptRegion {
     pub meshes: Vec<(usize, PieceId)>,
     pub vertices: usize,
     pub hash: u64,
-}
-
-/// What [`LightVolumeDraws::upload_for`] decides: vertices written from vertex `at` on, the
-/// buffer allocated for `allocate` vertices first.
-pub(super) struct VertexUpload {
-    pub meshes: Vec<(usize, PieceId)>,
-    pub at: usize,
-    pub allocate: Option<usize>,
 }
 
 /// The range receiver boxes (in the group's space) that piece `p`'s shadow can reach, and a
@@ -449,7 +397,7 @@ impl Placing {
     /// A kept mesh not planned this frame: in the buffer, not drawn.
     fn skip(&mut self, id: (usize, PieceId), cached: &CachedPart) {
         self.order.push(id);
-        self.total += cached.mesh.vertices.len();
+        self.total += cached.len();
     }
 
     /// Piece `p`'s part at the current place: its range (the vertices its counting draws),
@@ -466,8 +414,8 @@ impl Placing {
         let mesh = &cached.mesh;
         let first = self.total;
         self.order.push((p.group, p.id));
-        self.total += mesh.vertices.len();
-        if mesh.vertices.is_empty() {
+        self.total += cached.len();
+        if cached.len() == 0 {
             return;
         }
         // Depth-pass draws the sides and a truncated volume's far cap, depth-fail both caps
@@ -490,8 +438,9 @@ impl Placing {
             depth_bounds: p.depth_range.filter(|_| choices.depth_bounds),
             elements: None,
         };
+        // A part whose CPU copy was given up is drawn whole (the GL clips the same).
         let test = ClipTest::new(choices.camera.view_proj * p.model, &range.depth_clip)
-            .filter(|_| choices.cull_clipped && range.drawn());
+            .filter(|_| choices.cull_clipped && range.drawn() && cached.on_cpu());
         if let Some(test) = test {
             let start = self.indices.len();
             let drawn = &mesh.vertices[..mesh.side_vertices + caps];
