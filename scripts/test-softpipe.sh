@@ -34,7 +34,7 @@ run fixed_function
 run foundation
 run cli
 run shadow_volume
-run shadow_map -- copy_and_fbo hardware_and_shader alpha_and_intensity light_relative_texgen
+run shadow_map -- copy_and_fbo hardware_and_shader alpha_and_intensity light_relative_texgen light_relative_depth lifted
 # Maps drawn per light against every map first, and a released renderer: what a rasteriser
 # could draw differently. The other cases count textures reused and renderers grouped (the
 # same on every driver) and take minutes here.

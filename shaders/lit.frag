@@ -58,6 +58,11 @@ uniform int u_face;           // six-spot omni light: the cube face this pass li
 uniform vec4 u_cell;          // one of several frusta: (min, max) of its cell of the face's image
                               // plane (shadow/frusta.rs); min > max: the whole face
 uniform mat3 u_face_rot;      // the face view's rotation: light-relative world to its eye space
+// shadow_map.normal_offset: (constant, share of the largest coordinate) of the lift along the
+// normal of the point whose depth is compared per fragment; 0: the point itself.
+uniform vec2 u_normal_offset;
+// That point, relative to the light (set first in main).
+vec3 g_compared = vec3(0.0);
 uniform int u_sm_alpha_func;  // glAlphaFunc emulation: 0 NEVER .. 7 ALWAYS (options AlphaTestFunc)
 uniform float u_sm_alpha_ref;
 #ifdef HYBRID
@@ -99,9 +104,9 @@ bool alpha_test(int func, float a, float ref) {
 vec4 spot_coords() {
 #ifdef TEXGEN_FRAGMENT
 #ifdef SIX_SPOTS
-    return u_texgens[g_face] * vec4(v_world - u_light_pos, 1.0);
+    return u_texgens[g_face] * vec4(g_compared, 1.0);
 #else
-    return u_texgen * vec4(v_world - u_light_pos, 1.0);
+    return u_texgen * vec4(g_compared, 1.0);
 #endif
 #elif defined(SIX_SPOTS)
     return v_shadows[g_face];
@@ -120,9 +125,9 @@ vec4 shadow_coords() {
 #ifdef WARP_DEPTH
 #ifdef TEXGEN_FRAGMENT
 #ifdef SIX_SPOTS
-    vec2 rq = (u_texgen_depths[g_face] * vec4(v_world - u_light_pos, 1.0)).zw;
+    vec2 rq = (u_texgen_depths[g_face] * vec4(g_compared, 1.0)).zw;
 #else
-    vec2 rq = (u_texgen_depth * vec4(v_world - u_light_pos, 1.0)).zw;
+    vec2 rq = (u_texgen_depth * vec4(g_compared, 1.0)).zw;
 #endif
 #elif defined(SIX_SPOTS)
     vec2 rq = v_shadow_refs[g_face];
@@ -157,6 +162,13 @@ uniform int u_mask_value;
 out vec4 o_color;
 
 void main() {
+    // Two-sided surfaces are lit on the side the camera sees.
+    vec3 n = normalize(gl_FrontFacing ? v_normal : -v_normal);
+#ifdef SHADOW_MAP
+    vec3 p = abs(v_world);
+    float lift = u_normal_offset.x + u_normal_offset.y * max(p.x, max(p.y, p.z));
+    g_compared = v_world + n * lift - u_light_pos;
+#endif
 #ifdef PRIORITY_MIPMAP
     // The footprint of the pixel on the map, while every fragment of the quad is still here.
     {
@@ -174,15 +186,13 @@ void main() {
 #endif
     vec4 albedo = texture(u_texture, v_uv);
     if (!q3_alpha_passes(u_alpha_func, albedo.a)) discard;
-    // Two-sided surfaces are lit on the side the camera sees.
-    vec3 n = normalize(gl_FrontFacing ? v_normal : -v_normal);
     bool reached = light_reaches(v_world, n, u_light_pos, u_spot_dir, u_cos_cutoff, u_radius);
 #ifdef HYBRID
     // The marking pass keeps (marks) every pixel no volume needs to count: not reached by the
     // light, or decided by the map.
     float decided;
 #ifdef SHADOW_CUBE
-    bool agrees = map_agrees_cube(v_world - u_light_pos, decided);
+    bool agrees = map_agrees_cube(g_compared, decided);
 #else
     bool agrees = map_agrees(shadow_coords(), decided);
 #endif
@@ -213,7 +223,7 @@ void main() {
     // At silhouette pixels the stencil test has decided (count zero): lit.
     visibility = agrees ? decided : 1.0;
 #elif defined(SHADOW_CUBE)
-    visibility = shadow_visibility_cube(v_world - u_light_pos);
+    visibility = shadow_visibility_cube(g_compared);
 #else
     visibility = shadow_visibility(shadow_coords());
 #endif

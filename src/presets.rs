@@ -45,6 +45,8 @@ const PAPER: &[(&str, &str)] = &[
     ("shadow_map.omni", "six_spots"),
     ("shadow_map.cull", "front"),
     ("shadow_map.texgen", "eye_linear"),
+    ("shadow_map.caster_space", "world"),
+    ("shadow_map.normal_offset", "false"),
     ("shadow_map.buffer", "depth"),
     ("shadow_volume.casters", "front"),
     ("shadow_volume.counting", "zfail"),
@@ -166,7 +168,8 @@ mod tests {
         // casters: the paper's one-sided faces lose shadows on open worlds; the offset growth
         // erases later lights' contact shadows on maps with many lights; the light marks keep
         // overlapping triangles from taking a light twice; docs/checks.md; the texgen space:
-        // eye-linear planes round past the offset at Quake 3 scale, docs/shadow-maps.md; GPU
+        // eye-linear planes round past the offset at Quake 3 scale, docs/shadow-maps.md, and so
+        // does the depth pass's world-space transform, docs/checks.md; GPU
         // extrusion: `auto` extrudes what moves on the GPU under the gpu profile, the paper
         // builds every volume on the CPU; the map budget: the paper draws every map first,
         // whatever memory they take).
@@ -181,7 +184,9 @@ mod tests {
                 "lighting.light_once",
                 "plan.enabled",
                 "shadow_map.budget_mb",
+                "shadow_map.caster_space",
                 "shadow_map.cull",
+                "shadow_map.normal_offset",
                 "shadow_map.offset_growth",
                 "shadow_map.texgen",
                 "shadow_volume.casters",

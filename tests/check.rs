@@ -99,3 +99,25 @@ fn a_map_that_cannot_be_loaded_is_a_line_saying_why() {
     );
     std::fs::remove_dir_all(&dir).ok();
 }
+
+/// ctf_inyard from its first spawn shows parts of a ceiling over leaves outside the camera's
+/// PVS (the ceiling is drawn whole, one of its leaves being visible). Seven lights whose range
+/// meets only those leaves were culled by a test of the visible leaves, and their 172 lit
+/// pixels went dark under both techniques; the planner's decisions that claim to change no
+/// pixel now change none there.
+#[test]
+fn the_planner_keeps_lights_that_reach_a_receiver_over_leaves_outside_the_pvs() {
+    let data = common::openarena_data();
+    let out = shadowlab()
+        .args(["check", "--data"])
+        .arg(&data)
+        .arg("ctf_inyard")
+        .output()
+        .unwrap();
+    let line: serde_json::Value = serde_json::from_str(common::stdout_of(out).trim()).unwrap();
+    let planner = line["planner"].as_array().unwrap();
+    assert_eq!(planner.len(), 2, "{line}");
+    for p in planner {
+        assert_eq!(p["conservative_beyond_edge_band"], 0, "{p}");
+    }
+}

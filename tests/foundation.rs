@@ -152,7 +152,8 @@ fn info_json_reports_the_egl_path_and_each_missing_feature_as_a_fallback() {
     assert_eq!(missing, fallbacks.len());
     // No options given: the defaults, which differ from the paper's frame in the planner, the
     // technique, the casters (both faces), the offset growth, the light marks, the texgen
-    // space, the GPU extrusion (`auto`) and the map budget only.
+    // space, the depth pass's space, the compared point's lift, the GPU extrusion (`auto`) and
+    // the map budget only.
     assert_eq!(v["preset"], "default");
     let differs: Vec<&str> = v["differs_from_paper"]
         .as_array()
@@ -166,7 +167,9 @@ fn info_json_reports_the_egl_path_and_each_missing_feature_as_a_fallback() {
             "lighting.light_once",
             "plan.enabled",
             "shadow_map.budget_mb",
+            "shadow_map.caster_space",
             "shadow_map.cull",
+            "shadow_map.normal_offset",
             "shadow_map.offset_growth",
             "shadow_map.texgen",
             "shadow_volume.casters",

@@ -405,7 +405,7 @@ fn a_cube_face_draws_only_the_casters_in_its_frustum() {
             let all = &lp.view_casters[vi];
             assert_eq!(images.len(), 6);
             let mut listed = 0;
-            for (face, view_proj) in view.face_view_projs(eye) {
+            for (face, view_proj) in view.face_view_projs(eye, None) {
                 let image = &images[face.unwrap()];
                 let on_face: Vec<u32> = image.base.iter().chain(&image.moving).copied().collect();
                 listed += on_face.len();

@@ -4,8 +4,8 @@
 mod common;
 
 use common::{
-    Measurer, assert_masks_agree, id_buffers_run_or_fall_back, image_difference, load_scene_file,
-    options_with,
+    CHECK_SIZE, Measurer, assert_masks_agree, check_scene, id_buffers_run_or_fall_back,
+    image_difference, load_scene_file, options_with,
 };
 use shadowlab::images::MaskValue;
 use shadowlab::plan::pass::{PassId, Stage};
@@ -437,9 +437,11 @@ fn offsets_grow_per_light_under_the_paper_and_can_go_to_the_lit_pass() {
 /// and any rounding of the compared depth beyond that is acne. The cube map computes that depth
 /// per fragment from the light-relative position; so must the six spot maps to be as clean on
 /// every rasteriser. Measured (errors of light 2's receivers; llvmpipe / softpipe, Mesa 22.3):
-/// eye-linear planes 4.73% / 5.95%; light-relative planes per vertex 0.058% / 0.485% (softpipe
-/// rounds the interpolation of the projective coordinates more); per fragment 0.058% / 0.078%;
-/// the cube map 0.058% / 0.078%.
+/// eye-linear planes over maps drawn from world positions (the paper's pair) 4.73% / 5.95%
+/// (1.25% on llvmpipe over maps drawn relative to the light: part of that acne was the map's own
+/// rounding, `light_relative_depth_pass_keeps_a_wall_facing_a_face_head_on_lit`);
+/// light-relative planes per vertex 0.058% / 0.485% (softpipe rounds the interpolation of the
+/// projective coordinates more); per fragment 0.058% / 0.078%; the cube map 0.058% / 0.078%.
 #[test]
 fn light_relative_texgen_keeps_six_spot_maps_free_of_rounding_acne_at_quake_scale() {
     let (scene, _, options) = load_scene_file("oa_dm3");
@@ -455,7 +457,12 @@ fn light_relative_texgen_keeps_six_spot_maps_free_of_rounding_acne_at_quake_scal
         let o = options_with(&sets);
         m.measure(&o).light(2).rates().total
     };
-    let eye = error(&mut m, "shadow_map.texgen=eye_linear");
+    let mut paper = six.to_vec();
+    paper.extend([
+        "shadow_map.texgen=eye_linear",
+        "shadow_map.caster_space=world",
+    ]);
+    let eye = m.measure(&options_with(&paper)).light(2).rates().total;
     let vertex = error(&mut m, "shadow_map.texgen=light");
     let fragment = error(&mut m, "shadow_map.texgen=fragment");
     let cube = error(&mut m, "shadow_map.omni=cube");
@@ -485,4 +492,85 @@ fn light_relative_texgen_keeps_six_spot_maps_free_of_rounding_acne_at_quake_scal
         pct(vertex),
         pct(eye)
     );
+}
+
+/// Light `light`'s error on `m` under shadow maps with `sets`, at `check`'s size.
+fn check_error(m: &mut Measurer, light: usize, sets: &[&str]) -> f64 {
+    let only = format!("lighting.only={light}");
+    let mut all = vec![SM, only.as_str()];
+    all.extend_from_slice(&CHECK_SIZE);
+    all.extend_from_slice(sets);
+    let c = m.measure(&options_with(&all)).light(light);
+    assert!(c.receiver_pixels > 10_000, "{c:?}");
+    c.rates().total
+}
+
+/// oa_ctf2 as `shadowlab check` renders it, six spot maps (planner off): lights 15 and 56
+/// stand 93 and 156 units over a floor their −z faces see head-on, and nothing shadows it. Each
+/// face's near plane is fitted to its nearest caster, the floor itself, where a step of a 24-bit
+/// depth is about 6e-6 units: the offset's constant units are less than the float step by which
+/// the interpolated position misses the floor (z = 231.99998 for 232), and those rows were
+/// shadowed (2.7% and 1.6% of the lights' receivers on llvmpipe). Compared from the point
+/// lifted along the normal as the reference lifts its rays (`shadow_map.normal_offset`): 0.
+#[test]
+fn the_compared_point_lifted_as_the_reference_lifts_its_rays_keeps_a_floor_lit() {
+    let (scene, _) = check_scene("maps/oa_ctf2.bsp", "placed15");
+    let lights = ["placed15", "placed56"]
+        .map(|name| scene.lights.iter().position(|l| l.name == name).unwrap());
+    let mut m = Measurer::new(scene, &options_with(&CHECK_SIZE));
+    for light in lights {
+        // Over maps drawn from positions relative to the light; from world positions their own
+        // rounding happens to deepen these faces' depths and hides it.
+        let six = ["plan.enabled=false", "shadow_map.caster_space=light"];
+        let lifted = check_error(&mut m, light, &six);
+        let unlifted = check_error(
+            &mut m,
+            light,
+            &[&six[..], &["shadow_map.normal_offset=false"]].concat(),
+        );
+        println!(
+            "oa_ctf2, light {light}, six spots: lifted {}, not lifted {}",
+            pct(lifted),
+            pct(unlifted)
+        );
+        assert!(lifted < 0.01, "light {light}: {}", pct(lifted));
+    }
+}
+
+/// oa_koth2 as `shadowlab check` renders it (first spawn, placed lights, 320x240): light 41
+/// stands 64 units off a wall that faces its −y face head-on. Drawn from world positions
+/// through the light's single-precision matrices, the map's depths there are off by more than
+/// the offset's 4 units of a 24-bit map (the view's translation, about a thousand units,
+/// cancels within each product), so the wall within that face was shadowed: 12.3% of the
+/// light's receivers wrong under both the cube map and six spots on llvmpipe. Positions
+/// relative to the light (`shadow_map.caster_space = light`) keep the stored depth within a
+/// step of the lit pass's: 0.17%, what is left being edges. (The compared point's lift,
+/// `shadow_map.normal_offset`, hides this rounding too; the test turns it off.)
+#[test]
+fn light_relative_depth_pass_keeps_a_wall_facing_a_face_head_on_lit() {
+    let (scene, light) = check_scene("maps/oa_koth2.bsp", "placed41");
+    let mut m = Measurer::new(scene, &options_with(&CHECK_SIZE));
+    let mut error = |sets: &[&str]| check_error(&mut m, light, sets);
+    // The compared point's lift (`shadow_map.normal_offset`) is more than this rounding: off,
+    // so that the depth pass's own precision shows.
+    let unlifted = "shadow_map.normal_offset=false";
+    let cube = error(&[unlifted]);
+    let six = error(&[unlifted, "plan.enabled=false"]);
+    let world = error(&[unlifted, "shadow_map.caster_space=world"]);
+    let defaults = error(&[]);
+    println!(
+        "oa_koth2, light 41, not lifted: light-relative cube {}, six spots {}; world positions \
+         {}; defaults {}",
+        pct(cube),
+        pct(six),
+        pct(world),
+        pct(defaults)
+    );
+    for (what, e) in [
+        ("cube map", cube),
+        ("six spots", six),
+        ("defaults", defaults),
+    ] {
+        assert!(e < 0.01, "{what}: {}", pct(e));
+    }
 }

@@ -4,8 +4,8 @@
 mod common;
 
 use common::{
-    Measurer, SLIVER_SPECKS, assert_masks_agree_but, floor_quad, load_scene_file, options_with,
-    scene_of,
+    CHECK_SIZE, Measurer, SLIVER_SPECKS, assert_masks_agree_but, check_scene, floor_quad,
+    load_scene_file, options_with, scene_of,
 };
 use glam::Vec3;
 use shadowlab::images::{Mask, MaskValue};
@@ -505,4 +505,38 @@ fn a_volume_lights_mask_reads_its_counts_before_its_lit_pass_marks_the_stencil()
             assert_eq!(wrong, 0, "{counting} light {light}: mask against stencil");
         }
     }
+}
+
+/// suspended as `shadowlab check` renders it: shadow volumes err on 1.07% of the receivers
+/// there, with the planner on and off, the largest volume error of the data set. Light 0 stands
+/// 96 units over a floor under an alpha-tested grate (`textures/base_floor/proto_grate`): the
+/// reference lets its rays through the grate's holes, a volume extruded from the grate's
+/// triangles cannot. Measured against the reference with alpha-tested casters solid (what a
+/// geometric technique aims at), every light is exact away from shadow edges: the whole error
+/// is the grate's holes.
+#[test]
+fn suspended_volume_error_is_the_alpha_tested_grate_s_holes() {
+    let (scene, _) = check_scene("maps/suspended.bsp", "placed0");
+    let mut m = Measurer::new(scene, &options_with(&CHECK_SIZE));
+    let mut sets = vec![SV];
+    sets.extend_from_slice(&CHECK_SIZE);
+    let r = m.measure(&options_with(&sets));
+    let solid = Reference::build_with(&m.scene, false);
+    let g = r.frame.gbuffer.as_ref().unwrap();
+    let geometric = truth::measure::measure(&m.scene, &solid, g, &r.frame.masks);
+    let (exact, solid) = (r.total.rates(), geometric.total.rates());
+    println!(
+        "suspended, volumes: {} against the reference, {} ({} excl. boundary) against it with \
+         alpha-tested casters solid",
+        pct(exact.total),
+        pct(solid.total),
+        pct(solid.total_excl_boundary)
+    );
+    // What check measures (1.07%), of which nothing is left without the holes but edges.
+    assert!(exact.total > 0.005, "{}", pct(exact.total));
+    assert!(
+        solid.total_excl_boundary < 0.0005,
+        "{}",
+        pct(solid.total_excl_boundary)
+    );
 }

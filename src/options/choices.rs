@@ -435,6 +435,24 @@ option_enum! {
 }
 
 option_enum! {
+    /// The positions a shadow map's depth pass transforms (the shader pipeline; the legacy one
+    /// loads the light's matrices as glLoadMatrix does, in world space).
+    pub enum CasterSpace {
+        /// World positions through the light's view and projection in single precision, as
+        /// glLoadMatrix does (the paper). At Quake 3 scale (coordinates in the thousands) the
+        /// view's translation cancels most of each product, and the depth the map stores is off
+        /// by several steps of a 24-bit map: more than the offset's 4 units on a wall facing the
+        /// light head-on (oa_koth2's light 41: 12.3% of its receivers falsely shadowed).
+        World = "world",
+        /// Positions relative to the light (the light's position subtracted in the vertex
+        /// shader), through the view and projection composed in double precision: no large
+        /// numbers cancel, and the stored depth is what the lit pass's light-relative texgen
+        /// computes for the same point.
+        Light = "light",
+    }
+}
+
+option_enum! {
     /// Where the lit pass's texgen planes are applied (the shader pipeline; the legacy one is
     /// glTexGen's own, eye-linear).
     pub enum TexgenSpace {

@@ -180,7 +180,7 @@ define_options! {
         /// back, so a frame never waits on it) or `auto` (`software` on llvmpipe, softpipe
         /// and OSMesa, else `gpu`). The decisions each profile turns off say so below.
         profile: Profile = Profile::Auto;
-        /// Skip lights whose range misses the view frustum or every visible BSP leaf, and give
+        /// Skip lights whose range misses the view frustum or every receiver in view, and give
         /// no shadow work to a light with no caster in range.
         cull_lights: bool = true;
         /// Per light, draw only visible receivers within its range (and, for an omni light's
@@ -465,6 +465,18 @@ define_options! {
         /// vertex (`light`) or per fragment (`fragment`, the default: it holds on every
         /// rasteriser measured).
         texgen: TexgenSpace = TexgenSpace::Fragment;
+        /// What the depth pass transforms: world positions (the paper) or positions relative to
+        /// the light, which keep the stored depth within a step of the lit pass's
+        /// (docs/checks.md, oa_koth2).
+        caster_space: CasterSpace = CasterSpace::Light;
+        /// Compare the depth of the receiver's point lifted along its normal by the exact
+        /// reference's own ray-origin lift (0.01 units plus 4e-6 of its largest coordinate),
+        /// where the compared depth is computed per fragment (`texgen = fragment`, cube maps).
+        /// The interpolated position is a float step off the surface (1.5e-5 units at 232), and
+        /// where a face's near plane is fitted close to a wall it sees head-on, the offset's
+        /// constant units are smaller than that step in world units (oa_ctf2's six spots: 1.3%
+        /// of the receivers falsely shadowed in rows; docs/shadow-maps.md).
+        normal_offset: bool = true;
     }
 
     /// Warped shadow maps: perspective (`technique = psm`, thesis chapter 4) and trapezoidal

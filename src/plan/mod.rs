@@ -234,7 +234,8 @@ pub struct PlanStats {
     pub lights_planned: usize,
     /// Lights whose range misses the view frustum or lands off screen.
     pub lights_culled_frustum: usize,
-    /// Lights whose range reaches no visible BSP leaf or receiver.
+    /// Lights whose range reaches no receiver in view (the PVS and the frustum decide which
+    /// surfaces are in view).
     pub lights_culled_pvs: usize,
     /// Planned lights left without shadow work: no caster in range, or none whose shadow
     /// reaches the view.

@@ -157,15 +157,13 @@ impl WorldVis {
     }
 
     /// Marks in `visible` (indexed by scene surface) every surface of a leaf in the camera's PVS
-    /// whose box meets the frustum, and collects those leaves' boxes in `leaves`. `use_pvs` /
-    /// `frustum` = None switch either test off.
+    /// whose box meets the frustum. `use_pvs` / `frustum` = None switch either test off.
     pub fn mark_visible(
         &self,
         eye: Vec3,
         frustum: Option<&Frustum>,
         use_pvs: bool,
         visible: &mut [bool],
-        leaves: &mut Vec<Aabb>,
     ) -> VisStats {
         let camera_leaf = self.leaf_at(eye);
         let cluster = camera_leaf.map_or(-1, |l| self.leafs[l].cluster);
@@ -187,7 +185,6 @@ impl WorldVis {
                 stats.leaves_outside_frustum += 1;
                 return;
             }
-            leaves.push(ibox(l.mins, l.maxs));
             let range = l.first_leaf_surface as usize
                 ..(l.first_leaf_surface + l.num_leaf_surfaces) as usize;
             for &s in &self.leaf_surfaces[range] {

@@ -127,14 +127,30 @@ impl ShadowView {
     }
 
     /// What drawing this view's map draws: a cube's six faces seen from the light at `eye`
-    /// (by face), or the one view.
-    pub fn face_view_projs(&self, eye: Vec3) -> Vec<(Option<usize>, Mat4)> {
+    /// (by face), or the one view; for world positions, or with `origin` for positions
+    /// relative to it (composed in double precision, see [`Self::texgen_relative`]).
+    pub fn face_view_projs(&self, eye: Vec3, origin: Option<Vec3>) -> Vec<(Option<usize>, Mat4)> {
+        let from = |m: glam::DMat4, world: Mat4| origin.map_or(world, |o| relative(m, o));
         match self.kind {
             ViewKind::Cube => (0..6)
-                .map(|f| (Some(f), self.projection * cube_face_view(eye, f)))
+                .map(|f| {
+                    let view = cube_face_view(eye, f);
+                    let m = self.projection.as_dmat4() * view.as_dmat4();
+                    (Some(f), from(m, self.projection * view))
+                })
                 .collect(),
-            _ => vec![(None, self.view_proj())],
+            _ => {
+                let m = self.projection.as_dmat4() * self.view.as_dmat4();
+                vec![(None, from(m, self.view_proj()))]
+            }
         }
+    }
+
+    /// The matrix whose depth a warped map stores (`depth_view_proj`), for world positions or,
+    /// with `origin`, for positions relative to it.
+    pub fn depth_matrix_from(&self, origin: Option<Vec3>) -> Option<Mat4> {
+        let m = self.depth_view_proj?;
+        Some(origin.map_or(m, |o| relative(m.as_dmat4(), o)))
     }
 
     /// The side of this view's map: its own under multiple frusta, `shadow_map.size` else.

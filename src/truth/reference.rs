@@ -21,9 +21,13 @@ use nalgebra::{Point3, Vector3};
 /// triangle still enter its box (the `bvh` crate treats in-plane rays as misses).
 const BOX_PAD: f64 = 1e-3;
 
+/// The shadow ray origin's lift off the surface: a constant and a share of the position's
+/// largest coordinate (the float tolerance of positions at that scale).
+pub const ORIGIN_LIFT: (f64, f64) = (0.01, 4e-6);
+
 /// How far the shadow ray's origin is lifted off the surface along the normal.
 pub fn origin_offset(p: DVec3) -> f64 {
-    0.01 + 4e-6 * p.abs().max_element()
+    ORIGIN_LIFT.0 + ORIGIN_LIFT.1 * p.abs().max_element()
 }
 
 /// Where the shadow ray from surface point `p` with normal `n` starts.

@@ -191,6 +191,24 @@ pub fn openarena_data() -> std::path::PathBuf {
     dir
 }
 
+/// A map of `shadowlab check`'s data set as it renders it (first spawn, placed lights), and the
+/// index of its light `name`.
+pub fn check_scene(bsp: &str, name: &str) -> (shadowlab::scene::Scene, usize) {
+    let data = openarena_data();
+    let (scene, _) = shadowlab::report::check::scene_file(&data, bsp)
+        .build(&options_with(&CHECK_SIZE))
+        .unwrap_or_else(|e| panic!("{e}"));
+    let light = scene
+        .lights
+        .iter()
+        .position(|l| l.name == name)
+        .unwrap_or_else(|| panic!("{bsp} has no light {name}"));
+    (scene, light)
+}
+
+/// `shadowlab check`'s frame size.
+pub const CHECK_SIZE: [&str; 2] = ["width=320", "height=240"];
+
 /// Loads a scene file from `assets/scenes/` with default options (no progress bar).
 pub fn load_scene_file(name: &str) -> (Scene, shadowlab::scene_file::LoadReport, Options) {
     openarena_data();

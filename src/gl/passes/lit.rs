@@ -8,6 +8,7 @@ use crate::options::{OffsetPass, Outside, ShadowMapOptions, TexgenSpace};
 use crate::plan::LightPlan;
 use crate::scene::{LightKind, light::SPOT_INNER_FRACTION};
 use crate::shadow::views::{ShadowView, ViewKind};
+use crate::truth::reference::ORIGIN_LIFT;
 use glam::{Mat4, Vec3};
 use glow::HasContext;
 
@@ -61,6 +62,15 @@ fn bind_maps(ctx: &PassContext, program: &Program, lp: &LightPlan, shadow: &LitS
     set_light(ctx, program, lp);
     let o = &ctx.settings.shadow_map;
     set_offset_and_clips(gl, o, lp, shadow);
+    let lift = match o.normal_offset {
+        true => ORIGIN_LIFT,
+        false => (0.0, 0.0),
+    };
+    program.set_vec2(
+        gl,
+        "u_normal_offset",
+        glam::Vec2::new(lift.0 as f32, lift.1 as f32),
+    );
     let space = TexgenFrame::of(ctx, lp);
     let table = match shadow {
         LitShadow::Map(s) => s.table,

@@ -74,6 +74,9 @@ pub struct MapView<'a> {
     pub buffer: MapBuffer,
     pub table: Option<glow::Texture>,
     pub light_position: glam::Vec3,
+    /// What `view_proj` and `depth_view_proj` take positions relative to (zero: world
+    /// positions; `shadow_map.caster_space`).
+    pub origin: glam::Vec3,
     /// Draw over what the map holds (a copy of its static map) instead of clearing it.
     pub over: bool,
 }
@@ -95,6 +98,7 @@ pub fn render(ctx: &PassContext, program: &Program, view: &MapView, target: &Dep
     let o = &ctx.settings.shadow_map;
     program.bind(gl);
     program.set_mat4(gl, "u_view_proj", &view.view_proj);
+    program.set_vec3(gl, "u_origin", view.origin);
     program.set_i32(gl, "u_texture", 0);
     if let Some(depth) = view.depth_view_proj {
         program.set_mat4(gl, "u_depth_view_proj", &depth);

@@ -2,6 +2,7 @@
 //! passes that read them.
 
 use super::*;
+use crate::options::CasterSpace;
 use crate::plan::ImageCasters;
 
 impl<'a> FrameRun<'a> {
@@ -136,7 +137,8 @@ impl<'a> FrameRun<'a> {
             // What the texture held is gone, whether or not the frame stops before the end.
             self.shadow_maps.set_content(lp.light, vi, None);
             self.cache.maps_rendered += 1;
-            let faces = view.face_view_projs(self.ctx.scene.lights[lp.light].position);
+            let eye = self.ctx.scene.lights[lp.light].position;
+            let faces = view.face_view_projs(eye, self.map_origin(lp));
             match lp.view_static_keys.get(vi).copied().flatten() {
                 Some(static_key) => {
                     go_on!(self.map_over_static((lp, vi), &faces, static_key, buffers, kind))
@@ -259,6 +261,14 @@ impl<'a> FrameRun<'a> {
         Ok(ControlFlow::Continue(()))
     }
 
+    /// The origin of the positions a light's depth pass transforms
+    /// (`shadow_map.caster_space`): the light's position, or none (world positions) where the
+    /// paper's space is chosen or the legacy pipeline loads the matrices itself.
+    fn map_origin(&self, lp: &LightPlan) -> Option<glam::Vec3> {
+        let relative = self.ctx.settings.shadow_map.caster_space == CasterSpace::Light;
+        (relative && self.fixed.is_none()).then(|| self.ctx.scene.lights[lp.light].position)
+    }
+
     pub(super) fn map_face(
         &mut self,
         lp: &LightPlan,
@@ -293,7 +303,8 @@ impl<'a> FrameRun<'a> {
             cube_face: face,
             offset: lp.map_offset,
             casters: draw.casters,
-            depth_view_proj: lp.views[vi].depth_view_proj,
+            depth_view_proj: lp.views[vi].depth_matrix_from(self.map_origin(lp)),
+            origin: self.map_origin(lp).unwrap_or(glam::Vec3::ZERO),
             buffer: buffers.buffer,
             table: buffers.table,
             light_position: self.ctx.scene.lights[lp.light].position,

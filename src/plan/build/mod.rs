@@ -48,8 +48,6 @@ struct FrameFacts<'a> {
     near: f32,
     /// Where depth-pass counts start (`plan.near_plane_test`).
     near_quad: [Vec3; 4],
-    /// BSP leaves in view (Quake 3 worlds).
-    leaves: Vec<Aabb>,
     receivers_in_view: Vec<u32>,
     caster_list: Vec<u32>,
     /// Alpha-tested casters: `auto` and the counting choice treat them apart.
@@ -79,7 +77,7 @@ impl Plan {
             surfaces: scene.surfaces.len(),
             ..PlanStats::default()
         };
-        let (visible, leaves) = visibility(scene, &camera_setup, options, &mut stats);
+        let visible = visibility(scene, &camera_setup, options, &mut stats);
         let casters: Vec<bool> = scene
             .surfaces
             .iter()
@@ -93,7 +91,7 @@ impl Plan {
             (camera, camera_setup),
             options,
             (memory, kept),
-            (&visible, &casters, leaves),
+            (&visible, &casters),
             groups,
         );
         let (lights, culled, scissor_sum) = facts.plan_lights(&mut stats);
@@ -160,19 +158,18 @@ fn camera_for(scene: &Scene, camera: &Camera, options: &Options) -> CameraSetup 
 }
 
 /// Per surface, whether camera passes draw it (the PVS and frustum tests of the paper's base
-/// renderer for Quake 3 worlds; the frustum for models), and the BSP leaves in view.
+/// renderer for Quake 3 worlds; the frustum for models).
 fn visibility(
     scene: &Scene,
     camera: &CameraSetup,
     options: &Options,
     stats: &mut PlanStats,
-) -> (Vec<bool>, Vec<Aabb>) {
+) -> Vec<bool> {
     let frustum = options
         .culling
         .frustum
         .then(|| Frustum::from_view_proj(&camera.view_proj));
     let mut visible = vec![false; scene.surfaces.len()];
-    let mut leaves: Vec<Aabb> = Vec::new();
     match &scene.world {
         Some(world) => {
             stats.vis = Some(world.mark_visible(
@@ -180,7 +177,6 @@ fn visibility(
                 frustum.as_ref(),
                 options.culling.pvs,
                 &mut visible,
-                &mut leaves,
             ));
         }
         None => visible.iter_mut().for_each(|v| *v = true),
@@ -197,7 +193,7 @@ fn visibility(
             stats.triangles_visible += s.index_count as usize / 3;
         }
     }
-    (visible, leaves)
+    visible
 }
 
 /// Whether a spot's cone is wider than any one frustum `shadow_views` can give it (2 × cutoff,
@@ -244,14 +240,14 @@ fn near_quad_of(camera: &CameraSetup, options: &Options) -> [Vec3; 4] {
 }
 
 impl<'a> FrameFacts<'a> {
-    /// `(camera, setup)`: the scene camera and its setup; `(visible, casters, leaves)`: per
-    /// surface drawn and casting, and the BSP leaves in view.
+    /// `(camera, setup)`: the scene camera and its setup; `(visible, casters)`: per surface
+    /// drawn and casting.
     fn new(
         scene: &'a Scene,
         (camera, setup): (&Camera, CameraSetup),
         options: &'a Options,
         (memory, kept): (&'a AutoMemory, &'a KeptFrusta),
-        (visible, casters, leaves): (&[bool], &[bool], Vec<Aabb>),
+        (visible, casters): (&[bool], &[bool]),
         groups: Option<&'a CasterGroups>,
     ) -> FrameFacts<'a> {
         let n = scene.lights.len();
@@ -310,7 +306,6 @@ impl<'a> FrameFacts<'a> {
             near_quad: near_quad_of(&setup, options),
             camera: setup,
             scene_camera: *camera,
-            leaves,
             receivers_in_view,
             caster_list,
             alpha_caster_bounds,
@@ -426,8 +421,8 @@ impl<'a> FrameFacts<'a> {
         out
     }
 
-    /// Light culling: the view frustum, then the visible leaves and receivers, then the
-    /// screen rectangle. The light's receivers in view and its rectangle, or None: culled.
+    /// Light culling: the view frustum, then the receivers in view, then the screen
+    /// rectangle. The light's receivers in view and its rectangle, or None: culled.
     fn cull_light(
         &self,
         index: usize,
@@ -454,16 +449,16 @@ impl<'a> FrameFacts<'a> {
             self.receivers_in_view.clone()
         };
         stats.receivers_culled += self.receivers_in_view.len() - receivers.len();
-        let reaches_leaf = scene.world.is_none()
-            || self
-                .leaves
-                .iter()
-                .any(|b| cull::sphere_meets_aabb(pos, radius, b))
-            || receivers
-                .iter()
-                .any(|&s| matches!(scene.surfaces[s as usize].owner, SurfaceOwner::Model(_)));
-        let reaches_receiver = !p.cull_receivers || !receivers.is_empty();
-        if on && p.cull_lights && !(reaches_leaf && reaches_receiver) {
+        // A light matters where its range meets a receiver in view. The PVS's visible leaves
+        // bound nothing more: a surface is drawn whole where one of its leaves is visible, and
+        // ctf_inyard shows parts of a ceiling over leaves outside the camera's PVS, lit by
+        // lights whose range meets no visible leaf (172 pixels left unlit; docs/checks.md).
+        let reaches_receiver = !receivers.is_empty()
+            && (p.cull_receivers
+                || receivers.iter().any(|&s| {
+                    cull::sphere_meets_aabb(pos, radius, &scene.surfaces[s as usize].bounds)
+                }));
+        if on && p.cull_lights && !reaches_receiver {
             stats.lights_culled_pvs += 1;
             return None;
         }
