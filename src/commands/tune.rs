@@ -5,11 +5,12 @@
 use super::{CommonArgs, camera_path, load, start_gl};
 use anyhow::{Context, Result};
 use indicatif::ProgressBar;
+use shadowlab::options::Options;
 use shadowlab::report::bench::BenchRow;
 use shadowlab::report::plot;
 use shadowlab::report::progress;
 use shadowlab::report::table::{Align, Table, bench_table};
-use shadowlab::report::tune::{TuneResult, TuneSettings, space, tune};
+use shadowlab::report::tune::{TuneResult, TuneSettings, lighting_techniques, space, tune};
 use std::path::PathBuf;
 
 #[derive(clap::Args)]
@@ -124,6 +125,16 @@ fn per_light_table(result: &TuneResult) -> Table {
     t
 }
 
+/// What draws each light with its own size: the filter is one for every light, so among the
+/// scene's filter's sizes and volumes.
+fn per_light_sets(result: &TuneResult, base: &Options) -> String {
+    format!(
+        "Each light its own map size, at the scene's filter ({}): `--set lighting.techniques={}`\n",
+        base.shadow_map.filter,
+        lighting_techniques(&result.per_light_drawable)
+    )
+}
+
 fn answer(result: &TuneResult, accuracy: f64) -> String {
     match result.cheapest_meeting(accuracy) {
         Some(r) => format!(
@@ -219,8 +230,9 @@ pub fn run(common: &CommonArgs, args: &Args) -> Result<()> {
         String::new()
     } else {
         format!(
-            "## Per light\n\n{}\n",
-            per_light_table(&result).to_markdown()
+            "## Per light\n\n{}\n{}\n",
+            per_light_table(&result).to_markdown(),
+            per_light_sets(&result, &options)
         )
     };
     let md = format!(
@@ -246,6 +258,7 @@ pub fn run(common: &CommonArgs, args: &Args) -> Result<()> {
     println!("{}", frontier.to_markdown());
     if !result.per_light.is_empty() {
         println!("{}", per_light_table(&result).to_markdown());
+        println!("{}", per_light_sets(&result, &options));
     }
     println!("{}", answer(&result, args.accuracy));
     eprintln!("wrote {}/tune.md, tune.json, tune.png", out.display());

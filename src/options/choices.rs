@@ -81,14 +81,20 @@ impl Options {
 }
 
 /// What `technique = auto` chooses for a light: a technique and, for standard maps, what they
-/// store. Written `shadow_map:id` in `auto_among`; a bare `shadow_map` stores what
-/// `shadow_map.buffer` says.
+/// store and their size. Written `shadow_map:id` or `shadow_map@1024` (or both,
+/// `shadow_map:id@1024`) in `auto_among`; a bare `shadow_map` stores what `shadow_map.buffer`
+/// says at `shadow_map.size`.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
 pub struct Candidate {
     pub technique: Technique,
     /// Depth for every technique but `shadow_map` (see [`Options::map_buffer`]).
     pub buffer: MapBuffer,
+    /// The light's own map size (`shadow_map@1024`); None: `shadow_map.size`.
+    pub size: Option<u32>,
 }
+
+/// The map sizes `shadow_map@N` may name: `shadow_map.size`'s range.
+const CANDIDATE_SIZES: std::ops::RangeInclusive<u32> = 16..=8192;
 
 impl Candidate {
     /// `technique` with the buffer `options` give it.
@@ -96,30 +102,67 @@ impl Candidate {
         Candidate {
             technique,
             buffer: options.map_buffer(technique),
+            size: None,
         }
     }
 
-    /// One `auto_among` entry: `technique` or `shadow_map:buffer`, resolved under `options`.
+    /// Standard maps storing `buffer`, at `shadow_map.size`.
+    pub fn maps(buffer: MapBuffer) -> Candidate {
+        Candidate {
+            technique: Technique::ShadowMap,
+            buffer,
+            size: None,
+        }
+    }
+
+    /// The same candidate with maps of `size` texels a side.
+    pub fn sized(self, size: u32) -> Candidate {
+        Candidate {
+            size: Some(size),
+            ..self
+        }
+    }
+
+    /// One `auto_among` entry: `technique`, `shadow_map:buffer`, `shadow_map@size` or
+    /// `shadow_map:buffer@size`, resolved under `options`.
     pub(super) fn parse(text: &str, options: &Options) -> Result<Candidate, String> {
-        let (technique, buffer) = match text.split_once(':') {
-            Some((t, b)) => (t, Some(b)),
+        let (name, size) = match text.split_once('@') {
+            Some((n, s)) => {
+                let size: u32 = s
+                    .trim()
+                    .parse()
+                    .map_err(|_| format!("`{}`: the size after @ is a number", text.trim()))?;
+                if !CANDIDATE_SIZES.contains(&size) {
+                    return Err(format!(
+                        "`{}`: a map size is within {}..={}",
+                        text.trim(),
+                        CANDIDATE_SIZES.start(),
+                        CANDIDATE_SIZES.end()
+                    ));
+                }
+                (n, Some(size))
+            }
             None => (text, None),
+        };
+        let (technique, buffer) = match name.split_once(':') {
+            Some((t, b)) => (t, Some(b)),
+            None => (name, None),
         };
         let technique = Technique::parse_value(technique)?;
         if matches!(technique, Technique::None | Technique::Auto) {
             return Err(format!("`{technique}` is not a shadow technique"));
         }
-        match buffer {
-            None => Ok(Candidate::of(technique, options)),
-            Some(b) if technique == Technique::ShadowMap => Ok(Candidate {
-                technique,
-                buffer: MapBuffer::parse_value(b)?,
-            }),
-            Some(_) => Err(format!(
-                "`{}`: only shadow_map takes a buffer (shadow_map:id)",
+        if technique != Technique::ShadowMap && (buffer.is_some() || size.is_some()) {
+            return Err(format!(
+                "`{}`: only shadow_map takes a buffer or a size (shadow_map:id, shadow_map@1024)",
                 text.trim()
-            )),
+            ));
         }
+        let candidate = match buffer {
+            None => Candidate::of(technique, options),
+            Some(b) => Candidate::maps(MapBuffer::parse_value(b)?),
+        };
+        Ok(Candidate { size, ..candidate })
     }
 }
 
@@ -129,15 +172,20 @@ impl From<Technique> for Candidate {
         Candidate {
             technique,
             buffer: MapBuffer::Depth,
+            size: None,
         }
     }
 }
 
 impl fmt::Display for Candidate {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        match self.buffer {
-            MapBuffer::Depth => write!(f, "{}", self.technique),
-            b => write!(f, "{}:{b}", self.technique),
+        write!(f, "{}", self.technique)?;
+        if self.buffer != MapBuffer::Depth {
+            write!(f, ":{}", self.buffer)?;
+        }
+        match self.size {
+            Some(size) => write!(f, "@{size}"),
+            None => Ok(()),
         }
     }
 }

@@ -87,7 +87,7 @@ impl Options {
     }
 
     /// The `lighting.techniques` overrides, in order.
-    fn technique_overrides(&self) -> Result<Vec<(usize, Technique)>, OptionError> {
+    fn technique_overrides(&self) -> Result<Vec<(usize, Candidate)>, OptionError> {
         let text = self.lighting.techniques.trim();
         if text.is_empty() {
             return Ok(Vec::new());
@@ -102,8 +102,12 @@ impl Options {
                     .trim()
                     .parse::<usize>()
                     .map_err(|e| bad(format!("`{index}`: {e}")))?;
-                let technique = Technique::parse_value(technique).map_err(bad)?;
-                Ok((index, technique))
+                let candidate = match Technique::parse_value(technique.trim()) {
+                    // `none` and `auto` are overrides too, though no candidate of `auto`'s.
+                    Ok(t @ (Technique::None | Technique::Auto)) => Candidate::of(t, self),
+                    _ => Candidate::parse(technique, self).map_err(bad)?,
+                };
+                Ok((index, candidate))
             })
             .collect()
     }
@@ -126,7 +130,8 @@ impl Options {
             let part = part.trim();
             let entry = match Candidate::parse(part, self) {
                 Ok(c) if c.technique == Technique::ShadowMap && part.contains(':') => {
-                    "shadow_map:depth".to_string()
+                    let size = c.size.map_or(String::new(), |s| format!("@{s}"));
+                    format!("shadow_map:depth{size}")
                 }
                 _ => part.to_string(),
             };
@@ -152,24 +157,35 @@ impl Options {
 
     /// The technique light `index` uses: its override, else `technique`.
     pub fn technique_for(&self, index: usize) -> Technique {
+        self.candidate_for(index).technique
+    }
+
+    /// What light `index` runs with: its override (which may name a map buffer or size,
+    /// `3:shadow_map@2048`), else `technique` with its options' buffer and size.
+    pub fn candidate_for(&self, index: usize) -> Candidate {
         self.technique_overrides()
             .unwrap_or_default()
             .iter()
             .rev()
             .find(|(i, _)| *i == index)
-            .map_or(self.technique, |(_, t)| *t)
+            .map_or_else(|| Candidate::of(self.technique, self), |(_, c)| *c)
     }
 
     /// Sets (or with `None` removes) light `index`'s technique override.
     pub fn set_technique_for(&mut self, index: usize, technique: Option<Technique>) {
-        let mut pairs: Vec<(usize, Technique)> = self
-            .technique_overrides()
-            .unwrap_or_default()
-            .into_iter()
+        // The other lights' entries as written (a buffer or size they name stays).
+        let mut pairs: Vec<(usize, String)> = self
+            .lighting
+            .techniques
+            .split(',')
+            .filter_map(|pair| {
+                let (i, what) = pair.split_once(':')?;
+                Some((i.trim().parse::<usize>().ok()?, what.trim().to_string()))
+            })
             .filter(|(i, _)| *i != index)
             .collect();
         if let Some(t) = technique {
-            pairs.push((index, t));
+            pairs.push((index, t.to_string()));
         }
         pairs.sort_by_key(|(i, _)| *i);
         self.lighting.techniques = pairs
@@ -259,6 +275,44 @@ mod tests {
     }
 
     #[test]
+    fn auto_among_takes_a_map_size_for_standard_maps_only() {
+        let mut o = Options {
+            auto_among: "shadow_map@256, shadow_map:id@2048,shadow_map".into(),
+            ..Options::default()
+        };
+        o.validate().unwrap();
+        let choices = o.auto_choices();
+        let names: Vec<String> = choices.iter().map(|c| c.to_string()).collect();
+        assert_eq!(
+            names,
+            ["shadow_map@256", "shadow_map:id@2048", "shadow_map"]
+        );
+        assert_eq!(
+            choices.iter().map(|c| c.size).collect::<Vec<_>>(),
+            [Some(256), Some(2048), None]
+        );
+        for bad in [
+            "shadow_volume@512",
+            "shadow_map@",
+            "shadow_map@big",
+            "shadow_map@8",
+            "shadow_map@100000",
+        ] {
+            let b = Options {
+                auto_among: bad.into(),
+                ..Options::default()
+            };
+            assert!(b.validate().is_err(), "{bad}");
+        }
+        // Without ID buffers, an ID buffer of a size becomes a depth map of that size.
+        o.auto_among = "shadow_map:id@2048,shadow_volume".into();
+        assert_eq!(
+            o.auto_among_depth_only(),
+            "shadow_map:depth@2048,shadow_volume"
+        );
+    }
+
+    #[test]
     fn set_and_get_round_trip_for_every_key() {
         let defaults = Options::default();
         for spec in Options::specs() {
@@ -284,7 +338,19 @@ mod tests {
         o.set_technique_for(1, None);
         o.set_technique_for(0, Some(Technique::ShadowVolume));
         assert_eq!(o.lighting.techniques, "0:shadow_volume,3:none");
-        for bad in ["1", "x:shadow_map", "1:nope"] {
+        // A shadow-map entry may name its map's size and buffer; a set elsewhere keeps them.
+        o.set("lighting.techniques", "2:shadow_map@2048, 4:shadow_map:id")
+            .unwrap();
+        o.validate().unwrap();
+        assert_eq!(o.candidate_for(2).size, Some(2048));
+        assert_eq!(o.candidate_for(4).buffer, MapBuffer::Id);
+        assert_eq!(o.candidate_for(0), Candidate::of(Technique::ShadowMap, &o));
+        o.set_technique_for(3, Some(Technique::ShadowVolume));
+        assert_eq!(
+            o.lighting.techniques,
+            "2:shadow_map@2048,3:shadow_volume,4:shadow_map:id"
+        );
+        for bad in ["1", "x:shadow_map", "1:nope", "1:shadow_volume@512"] {
             o.set("lighting.techniques", bad).unwrap();
             assert!(o.validate().is_err(), "{bad}");
         }

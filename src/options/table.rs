@@ -163,8 +163,11 @@ define_options! {
         /// frame builds it, its cost is the cheapest of its first frames, as for every
         /// technique). `shadow_map:B` is standard maps storing B (depth, id, priority,
         /// priority_depth) whatever `shadow_map.buffer` says, so that `auto` chooses the
-        /// buffer too: `shadow_map,shadow_map:id,shadow_volume`. Each one is measured
-        /// before a one-frame command's frame, so every addition costs learning frames.
+        /// buffer too: `shadow_map,shadow_map:id,shadow_volume`. `shadow_map@N` is standard
+        /// maps of N texels a side whatever `shadow_map.size` says, so that each light gets
+        /// the size it needs: `shadow_map@256,shadow_map@2048,shadow_volume` (both forms
+        /// together: `shadow_map:id@1024`). Each one is measured before a one-frame command's
+        /// frame, so every addition costs learning frames.
         auto_among: String = "shadow_map,shadow_volume".to_string();
     }
 
@@ -351,7 +354,8 @@ define_options! {
         only: String = "all".to_string();
         /// Per-light technique overrides, `index:technique` pairs separated by commas (e.g.
         /// `0:shadow_volume,2:shadow_map`); other lights use `technique` (thesis 7: pick the
-        /// algorithm per case).
+        /// algorithm per case). A shadow-map entry may name its buffer and size as `auto_among`
+        /// does (`3:shadow_map@2048`, `4:shadow_map:id`): each light its own map.
         techniques: String = String::new();
         /// Brightness of the unlit pass where a surface has no lightmap (built-in scene, paper 2.4).
         ambient: f32 = 0.2, in 0.0 ..= 4.0;

@@ -126,6 +126,7 @@ fn technique_options(candidate: Candidate, options: &Options) -> String {
         Technique::ShadowMap => {
             let mut maps = options.shadow_map.clone();
             maps.buffer = candidate.buffer;
+            maps.size = candidate.size.unwrap_or(maps.size);
             serde_json::to_string(&maps)
         }
         Technique::ShadowVolume => serde_json::to_string(&volume_options(options)),
@@ -282,7 +283,8 @@ pub fn estimated_error(
         }
         Technique::ShadowMap | Technique::Psm | Technique::Tsm => {
             let o = &options.shadow_map;
-            let size = (512.0 / o.size.max(1) as f64).powf(0.75);
+            let side = candidate.size.unwrap_or(o.size);
+            let size = (512.0 / side.max(1) as f64).powf(0.75);
             let depth = if o.depth_bits == DepthBits::D16 {
                 19.0
             } else {
@@ -661,10 +663,7 @@ mod tests {
             auto_among: "shadow_map,shadow_map:id".into(),
             ..Options::default()
         };
-        let id = Candidate {
-            technique: Technique::ShadowMap,
-            buffer: MapBuffer::Id,
-        };
+        let id = Candidate::maps(MapBuffer::Id);
         let depth = Candidate::from(Technique::ShadowMap);
         // Unmeasured, each is tried in turn: depth maps first, as `auto_among` lists them.
         assert_eq!(
@@ -734,6 +733,17 @@ mod tests {
     fn the_map_error_estimate_follows_the_measured_sizes() {
         let mut o = Options::default();
         for (size, measured) in [(64, 0.0266), (512, 0.0041), (2048, 0.0019)] {
+            // A candidate's own size (`shadow_map@N`) is estimated as the option's would be.
+            let sized = Candidate::from(Technique::ShadowMap).sized(size);
+            assert_eq!(
+                estimated_error(sized, &o, false).to_bits(),
+                {
+                    let mut at = o.clone();
+                    at.shadow_map.size = size;
+                    estimated_error(Technique::ShadowMap, &at, false).to_bits()
+                },
+                "{size}"
+            );
             o.shadow_map.size = size;
             let e = estimated_error(Technique::ShadowMap, &o, false);
             let ratio = e / measured;

@@ -50,7 +50,7 @@ pub fn light_map_bytes(lp: &LightPlan, o: &ShadowMapOptions) -> u64 {
         .enumerate()
         .map(|(vi, view)| {
             let cube = view.kind == ViewKind::Cube;
-            let size = view.map_size(o.size);
+            let size = view.map_size();
             let levels = view_levels(lp.buffer, o.priority_mipmap, cube, size);
             let map = depth_texture_bytes(cube, size, o.depth_bits, levels);
             let statics = lp

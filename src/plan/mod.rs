@@ -132,6 +132,9 @@ pub struct LightPlan {
     /// What its maps store: `shadow_map.buffer` for standard maps unless `auto` chose
     /// otherwise (`shadow_map:id` in `auto_among`); depth for every other technique.
     pub buffer: MapBuffer,
+    /// Its maps' own size where `auto` chose one (`shadow_map@1024` in `auto_among`);
+    /// None: `shadow_map.size`. Its views carry the size they draw at.
+    pub map_size: Option<u32>,
     /// Position among this frame's enabled lights: the paper grows the polygon offset with it.
     pub order: usize,
     /// glPolygonOffset (factor, units) for this light's maps (`shadow_map.offset_*`, grown
@@ -313,13 +316,12 @@ impl Plan {
         self.lights.iter().any(|l| l.technique.uses_maps())
     }
 
-    /// The largest shadow map of the frame's views (`size` where every view has the
-    /// option's own); 0 without maps.
-    pub fn largest_map(&self, size: u32) -> u32 {
+    /// The largest shadow map of the frame's views; 0 without maps.
+    pub fn largest_map(&self) -> u32 {
         self.lights
             .iter()
             .filter(|l| l.technique.uses_maps())
-            .flat_map(|l| l.views.iter().map(|v| v.map_size(size)))
+            .flat_map(|l| l.views.iter().map(|v| v.map_size()))
             .max()
             .unwrap_or(0)
     }

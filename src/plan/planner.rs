@@ -108,6 +108,7 @@ impl Planner {
                 let candidate = Candidate {
                     technique: l.technique,
                     buffer: l.buffer,
+                    size: l.map_size,
                 };
                 (l.light, candidate)
             })

@@ -302,6 +302,10 @@ pub struct TuneResult {
     pub frontier: Vec<bool>,
     /// Per light, the cheapest of `per_light_configs` within the target (when asked for).
     pub per_light: Vec<LightChoice>,
+    /// The same among the configurations a frame can give each light its own of: the
+    /// scene's filter (one for every light) at any map size, or volumes. Their `entry`s,
+    /// joined, are the `lighting.techniques` that draws them ([`lighting_techniques`]).
+    pub per_light_drawable: Vec<LightChoice>,
 }
 
 /// One light's cheapest configuration within the target, by its own error and pass times.
@@ -315,6 +319,25 @@ pub struct LightChoice {
     pub ms: f64,
     /// False where nothing met the target: then the most accurate.
     pub meets: bool,
+    /// Its `lighting.techniques` entry: `3:shadow_map@1024`, `5:shadow_volume`.
+    pub entry: String,
+}
+
+/// The `lighting.techniques` value that gives each light of `choices` its own.
+pub fn lighting_techniques(choices: &[LightChoice]) -> String {
+    choices
+        .iter()
+        .map(|c| c.entry.as_str())
+        .collect::<Vec<_>>()
+        .join(",")
+}
+
+/// Light `light`'s `lighting.techniques` entry for a row's options.
+fn entry_of(light: usize, options: &Options) -> String {
+    match options.technique {
+        Technique::ShadowMap => format!("{light}:shadow_map@{}", options.shadow_map.size),
+        t => format!("{light}:{t}"),
+    }
 }
 
 /// Map sizes and filters measured per light.
@@ -376,6 +399,7 @@ pub fn per_light_choices(rows: &[BenchRow], target: f64) -> Vec<LightChoice> {
                         error: e.total,
                         ms: light_ms(r, light),
                         meets: e.total <= target,
+                        entry: entry_of(light, &r.options),
                     })
                 })
                 .collect();
@@ -577,7 +601,7 @@ pub fn tune_keeping(
     let (rows, rung) = measure_stage(renderer, scene, settings, (&configs, &[]), stage, bar, kept)?;
     rungs.push(rung);
     let ranks = pareto_ranks(&rows.iter().map(point).collect::<Vec<_>>());
-    let per_light = if settings.per_light {
+    let (per_light, per_light_drawable) = if settings.per_light {
         let configs = per_light_configs(&base)?;
         // One after another on one renderer: the passes are timed one by one anyway.
         let stage = Stage {
@@ -589,12 +613,20 @@ pub fn tune_keeping(
         };
         let (light_rows, mut rung) =
             measure_stage(renderer, scene, settings, (&configs, &[]), stage, bar, kept)?;
-        let choices = per_light_choices(&light_rows, settings.accuracy / 100.0);
+        let target = settings.accuracy / 100.0;
+        let choices = per_light_choices(&light_rows, target);
+        let filter = base.shadow_map.filter;
+        let drawable: Vec<BenchRow> = light_rows
+            .into_iter()
+            .filter(|r| {
+                r.options.technique != Technique::ShadowMap || r.options.shadow_map.filter == filter
+            })
+            .collect();
         rung.kept = choices.len();
         rungs.push(rung);
-        choices
+        (choices, per_light_choices(&drawable, target))
     } else {
-        Vec::new()
+        (Vec::new(), Vec::new())
     };
     Ok(TuneResult {
         scene: scene.name.clone(),
@@ -603,6 +635,7 @@ pub fn tune_keeping(
         frontier: ranks.iter().map(|r| *r == 0).collect(),
         rows,
         per_light,
+        per_light_drawable,
     })
 }
 
@@ -649,11 +682,19 @@ mod tests {
             }
             r
         };
-        let rows = [
+        let mut rows = [
             row("small", &[(0, 0.02, 1.0), (1, 0.004, 1.0)]),
             row("large", &[(0, 0.008, 3.0), (1, 0.001, 3.0)]),
             row("volumes", &[(0, 0.0001, 5.0), (1, 0.0, 2.0)]),
         ];
+        for (r, (technique, size)) in rows.iter_mut().zip([
+            (Technique::ShadowMap, 256),
+            (Technique::ShadowMap, 2048),
+            (Technique::ShadowVolume, 512),
+        ]) {
+            r.options.technique = technique;
+            r.options.shadow_map.size = size;
+        }
         let c = per_light_choices(&rows, 0.01);
         let picks: Vec<(usize, &str, bool)> = c
             .iter()
@@ -661,9 +702,15 @@ mod tests {
             .collect();
         assert_eq!(picks, vec![(0, "large", true), (1, "small", true)]);
         assert_eq!(c[0].ms, 3.0);
+        // What draws them: each light's own map size.
+        assert_eq!(
+            lighting_techniques(&c),
+            "0:shadow_map@2048,1:shadow_map@256"
+        );
         // Nothing within 0.001% for light 0: the most accurate.
         let strict = per_light_choices(&rows, 0.00001);
         assert_eq!(strict[0].label, "volumes");
+        assert_eq!(strict[0].entry, "0:shadow_volume");
         assert!(!strict[0].meets);
     }
 

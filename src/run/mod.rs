@@ -315,7 +315,7 @@ impl Renderer {
     /// The one limit no fallback lifts: a shadow map larger than the GL's textures. (Choices
     /// that need a missing feature were replaced before planning: `plan::fallback`.)
     fn check_support(&self, settings: &PassSettings, plan: &Plan) -> Result<(), RenderError> {
-        let size = plan.largest_map(settings.shadow_map.size);
+        let size = plan.largest_map();
         let max = self.drawer.caps.max_texture_size.max(1) as u32;
         if plan.any_maps() && size > max {
             return Err(RenderError::Unsupported(format!(

@@ -375,6 +375,7 @@ pub fn frustum_views(
                     size: f.size,
                     cell: f.cell,
                 }),
+                size: f.size,
             }
         })
         .collect()

@@ -116,9 +116,11 @@ pub struct ShadowView {
     /// trapezoid's projective map would scale each ray's depth by its own factor and make
     /// the map's depth slope, and so the slope-scaled offset, huge).
     pub depth_view_proj: Option<Mat4>,
-    /// One of several frusta over part of face `Face(f)`; None: a whole view of
-    /// `shadow_map.size`.
+    /// One of several frusta over part of face `Face(f)`; None: a whole view.
     pub part: Option<FacePart>,
+    /// Its map's side in texels: `shadow_map.size`, the light's own size (`auto`'s
+    /// `shadow_map@N`), or its frustum's.
+    pub size: u32,
 }
 
 impl ShadowView {
@@ -153,9 +155,9 @@ impl ShadowView {
         Some(origin.map_or(m, |o| relative(m.as_dmat4(), o)))
     }
 
-    /// The side of this view's map: its own under multiple frusta, `shadow_map.size` else.
-    pub fn map_size(&self, size: u32) -> u32 {
-        self.part.map_or(size, |p| p.size)
+    /// The side of this view's map in texels.
+    pub fn map_size(&self) -> u32 {
+        self.size
     }
 
     /// The paper's eye-linear texgen planes: T = B · P_light · V_light · V_camera⁻¹, taking camera
@@ -276,6 +278,7 @@ pub fn shadow_views(
                 far,
                 depth_view_proj: None,
                 part: None,
+                size: options.size,
             }]
         }
         LightKind::Omni => {
@@ -292,6 +295,7 @@ pub fn shadow_views(
                         far,
                         depth_view_proj: None,
                         part: None,
+                        size: options.size,
                     }
                 })
                 .collect();
@@ -312,6 +316,7 @@ pub fn shadow_views(
                         far,
                         depth_view_proj: None,
                         part: None,
+                        size: options.size,
                     }]
                 }
             }

@@ -190,7 +190,7 @@ fn bind_one_map(
     program.set_mat4(gl, "u_view", &space.to_texgen_space);
     program.set_mat4(gl, "u_texgen", &texgen);
     program.set_mat4(gl, "u_texgen_depth", &depth);
-    program.set_f32(gl, "u_map_size", s.view.map_size(o.size) as f32);
+    program.set_f32(gl, "u_map_size", s.view.map_size() as f32);
     program.set_i32(gl, "u_pcf_size", o.pcf_size as i32);
     program.set_i32(gl, "u_sm_alpha_func", o.alpha_func as i32);
     program.set_f32(gl, "u_sm_alpha_ref", o.alpha_ref);

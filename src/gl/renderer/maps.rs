@@ -97,7 +97,7 @@ impl<'a> FrameRun<'a> {
         let sm = &self.ctx.settings.shadow_map;
         let (view, buffer) = (&lp.views[vi], lp.buffer);
         let cube = view.kind == ViewKind::Cube;
-        let size = view.map_size(sm.size);
+        let size = view.map_size();
         let kind = MapKey {
             cube,
             size,
@@ -215,7 +215,7 @@ impl<'a> FrameRun<'a> {
             go_on!(self.map_base_faces((lp, vi), faces, fbo, into_static));
             self.shadow_maps.set_static_content(at, Some(static_key));
         }
-        let size = lp.views[vi].map_size(self.ctx.settings.shadow_map.size);
+        let size = lp.views[vi].map_size();
         let fbo = self.shadow_maps.fbo(gl).map_err(RenderError::Gl)?;
         self.timer
             .begin(gl, PassId::light(lp.light, Stage::ShadowMap));
@@ -278,7 +278,7 @@ impl<'a> FrameRun<'a> {
         buffers: MapBuffers,
     ) -> Flow<()> {
         let gl = self.ctx.gl;
-        let size = lp.views[vi].map_size(self.ctx.settings.shadow_map.size);
+        let size = lp.views[vi].map_size();
         let (face, view_proj) = (draw.face, draw.view_proj);
         let shown = face.or(Some(vi));
         let texture = buffers.depth;

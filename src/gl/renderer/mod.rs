@@ -506,7 +506,7 @@ impl Drawer {
     ) -> Result<bool, RenderError> {
         let sm = &settings.shadow_map;
         let copy = plan.any_maps() && copies_from_frame(sm);
-        let largest = plan.largest_map(sm.size);
+        let largest = plan.largest_map();
         let float_depth = copy && sm.depth_bits == DepthBits::D32f;
         // Maps drawn before each light's pass come after the base pass: copies are then made
         // from a framebuffer of their own, of the frame's formats, not from the frame.

@@ -33,15 +33,12 @@ fn frusta_line(
     o: &ShadowMapOptions,
     kept: bool,
 ) -> String {
-    let texels: u64 = views
-        .iter()
-        .map(|v| u64::from(v.map_size(o.size)).pow(2))
-        .sum();
+    let texels: u64 = views.iter().map(|v| u64::from(v.map_size()).pow(2)).sum();
     let each: Vec<String> = views
         .iter()
         .map(|v| match v.kind {
-            ViewKind::Face(f) => format!("{f}:{}", v.map_size(o.size)),
-            _ => format!("{}", v.map_size(o.size)),
+            ViewKind::Face(f) => format!("{f}:{}", v.map_size()),
+            _ => format!("{}", v.map_size()),
         })
         .collect();
     format!(
@@ -84,10 +81,12 @@ impl FrameFacts<'_> {
                 ..self.options.shadow_map.clone()
             };
             &six_spots
-        } else if plan.buffer != self.map_options.buffer {
-            // `auto` chose this light's buffer (`shadow_map:id` in `auto_among`).
+        } else if plan.buffer != self.map_options.buffer || plan.map_size.is_some() {
+            // `auto` chose this light's buffer or size (`shadow_map:id`, `shadow_map@1024` in
+            // `auto_among`).
             chosen_buffer = ShadowMapOptions {
                 buffer: plan.buffer,
+                size: plan.map_size.unwrap_or(self.map_options.size),
                 ..self.map_options.clone()
             };
             &chosen_buffer
@@ -118,6 +117,7 @@ impl FrameFacts<'_> {
         let light_key = hash_of((
             &self.map_options_text,
             plan.buffer,
+            plan.map_size,
             plan.order,
             mat_bits(&Mat4::from_translation(l.position)),
             l.radius.to_bits(),

@@ -351,6 +351,7 @@ impl<'a> FrameFacts<'a> {
             light: index,
             technique: chosen.technique,
             buffer: chosen.buffer,
+            map_size: chosen.size,
             order,
             map_offset: crate::plan::settings::map_offset(&self.map_options, order),
             views: Vec::new(),
@@ -392,6 +393,7 @@ impl<'a> FrameFacts<'a> {
         if let Some(why) = left_without {
             plan.technique = Technique::None;
             plan.buffer = MapBuffer::Depth;
+            plan.map_size = None;
             plan.reason = why.into();
         }
         if plan.technique == Technique::None && !plan.reason.is_empty() {
@@ -490,7 +492,7 @@ impl<'a> FrameFacts<'a> {
                     .push(format!("light {index}: {} ({})", c.candidate, c.reason));
                 (c.candidate, c.reason)
             }
-            t => (Candidate::of(t, self.options), String::new()),
+            _ => (self.options.candidate_for(index), String::new()),
         }
     }
 }
