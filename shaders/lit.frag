@@ -61,7 +61,7 @@ uniform mat3 u_face_rot;      // the face view's rotation: light-relative world 
 // shadow_map.normal_offset: (constant, share of the largest coordinate) of the lift along the
 // normal of the point whose depth is compared per fragment; 0: the point itself.
 uniform vec2 u_normal_offset;
-// That point, relative to the light (set first in main).
+// That point, relative to the light (set_compared).
 vec3 g_compared = vec3(0.0);
 uniform int u_sm_alpha_func;  // glAlphaFunc emulation: 0 NEVER .. 7 ALWAYS (options AlphaTestFunc)
 uniform float u_sm_alpha_ref;
@@ -161,16 +161,25 @@ uniform int u_mask_value;
 
 out vec4 o_color;
 
-void main() {
-    // Two-sided surfaces are lit on the side the camera sees.
-    vec3 n = normalize(gl_FrontFacing ? v_normal : -v_normal);
+// The surface's normal on the side the camera sees: two-sided surfaces are lit on that side.
+vec3 seen_normal() {
+    return normalize(gl_FrontFacing ? v_normal : -v_normal);
+}
+
 #ifdef SHADOW_MAP
+// Sets g_compared: the fragment's point lifted along its normal `n` by u_normal_offset.
+void set_compared(vec3 n) {
     vec3 p = abs(v_world);
     float lift = u_normal_offset.x + u_normal_offset.y * max(p.x, max(p.y, p.z));
     g_compared = v_world + n * lift - u_light_pos;
+}
 #endif
+
+void main() {
 #ifdef PRIORITY_MIPMAP
-    // The footprint of the pixel on the map, while every fragment of the quad is still here.
+    // The footprint of the pixel on the map, while every fragment of the quad is still here
+    // (before any discard: the compared point too).
+    set_compared(seen_normal());
     {
         vec4 c = shadow_coords();
         vec2 uv = c.xy / c.w;
@@ -186,6 +195,11 @@ void main() {
 #endif
     vec4 albedo = texture(u_texture, v_uv);
     if (!q3_alpha_passes(u_alpha_func, albedo.a)) discard;
+    vec3 n = seen_normal();
+#if defined(SHADOW_MAP) && !defined(PRIORITY_MIPMAP)
+    // After the discards: fragments of other faces and alpha holes compare nothing.
+    set_compared(n);
+#endif
     bool reached = light_reaches(v_world, n, u_light_pos, u_spot_dir, u_cos_cutoff, u_radius);
 #ifdef HYBRID
     // The marking pass keeps (marks) every pixel no volume needs to count: not reached by the

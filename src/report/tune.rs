@@ -7,7 +7,7 @@
 //! each step of error, what it costs in time.
 
 use super::bench::{Bench, BenchConfig, BenchRow, BenchSettings, Kept};
-use crate::options::{OptionError, Options, Technique};
+use crate::options::{Candidate, OptionError, Options, Technique};
 use crate::run::{RenderError, Renderer};
 use crate::scene::Scene;
 use crate::scene::path::PathKey;
@@ -332,11 +332,13 @@ pub fn lighting_techniques(choices: &[LightChoice]) -> String {
         .join(",")
 }
 
-/// Light `light`'s `lighting.techniques` entry for a row's options.
+/// Light `light`'s `lighting.techniques` entry for a row's options: its candidate as
+/// `auto_among` writes it, with the map size for standard maps.
 fn entry_of(light: usize, options: &Options) -> String {
+    let candidate = Candidate::of(options.technique, options);
     match options.technique {
-        Technique::ShadowMap => format!("{light}:shadow_map@{}", options.shadow_map.size),
-        t => format!("{light}:{t}"),
+        Technique::ShadowMap => format!("{light}:{}", candidate.sized(options.shadow_map.size)),
+        _ => format!("{light}:{candidate}"),
     }
 }
 

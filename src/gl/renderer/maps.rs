@@ -280,6 +280,7 @@ impl<'a> FrameRun<'a> {
         let gl = self.ctx.gl;
         let size = lp.views[vi].map_size();
         let (face, view_proj) = (draw.face, draw.view_proj);
+        let origin = self.map_origin(lp);
         let shown = face.or(Some(vi));
         let texture = buffers.depth;
         // ID buffers are drawn through the FBO: their IDs are colour, the frame's is not theirs.
@@ -303,8 +304,8 @@ impl<'a> FrameRun<'a> {
             cube_face: face,
             offset: lp.map_offset,
             casters: draw.casters,
-            depth_view_proj: lp.views[vi].depth_matrix_from(self.map_origin(lp)),
-            origin: self.map_origin(lp).unwrap_or(glam::Vec3::ZERO),
+            depth_view_proj: lp.views[vi].depth_matrix_from(origin),
+            origin: origin.unwrap_or(glam::Vec3::ZERO),
             buffer: buffers.buffer,
             table: buffers.table,
             light_position: self.ctx.scene.lights[lp.light].position,

@@ -439,13 +439,13 @@ impl<'a> FrameFacts<'a> {
             stats.lights_culled_frustum += 1;
             return None;
         }
+        let reaches =
+            |s: &u32| cull::sphere_meets_aabb(pos, radius, &scene.surfaces[*s as usize].bounds);
         let receivers: Vec<u32> = if on && p.cull_receivers {
             self.receivers_in_view
                 .iter()
                 .copied()
-                .filter(|&s| {
-                    cull::sphere_meets_aabb(pos, radius, &scene.surfaces[s as usize].bounds)
-                })
+                .filter(reaches)
                 .collect()
         } else {
             self.receivers_in_view.clone()
@@ -455,11 +455,11 @@ impl<'a> FrameFacts<'a> {
         // bound nothing more: a surface is drawn whole where one of its leaves is visible, and
         // ctf_inyard shows parts of a ceiling over leaves outside the camera's PVS, lit by
         // lights whose range meets no visible leaf (172 pixels left unlit; docs/checks.md).
-        let reaches_receiver = !receivers.is_empty()
-            && (p.cull_receivers
-                || receivers.iter().any(|&s| {
-                    cull::sphere_meets_aabb(pos, radius, &scene.surfaces[s as usize].bounds)
-                }));
+        let reaches_receiver = if on && p.cull_receivers {
+            !receivers.is_empty()
+        } else {
+            receivers.iter().any(reaches)
+        };
         if on && p.cull_lights && !reaches_receiver {
             stats.lights_culled_pvs += 1;
             return None;
