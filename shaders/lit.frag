@@ -159,7 +159,12 @@ vec4 shadow_coords() {
 uniform int u_mask_value;
 #endif
 
-out vec4 o_color;
+layout(location = 0) out vec4 o_color;
+#ifndef MASK_OUTPUT
+// The decision, recorded where the frame attaches a layer for this light (gl/record.rs):
+// (1, 0) lit, (0, 1) shadowed, added as the light is.
+layout(location = 1) out vec4 o_decision;
+#endif
 
 // The surface's normal on the side the camera sees: two-sided surfaces are lit on that side.
 vec3 seen_normal() {
@@ -213,6 +218,9 @@ void main() {
     if (u_hybrid_stage == 0) {
         if (reached && !agrees) discard;
         o_color = vec4(0.0);
+#ifndef MASK_OUTPUT
+        o_decision = vec4(0.0);
+#endif
         return;
     }
 #endif
@@ -258,6 +266,7 @@ void main() {
     int decision = u_mask_value != 0 ? u_mask_value : (lit ? 1 : 2);
     o_color = vec4(float(decision) / 255.0, 0.0, 0.0, 1.0);
 #else
+    o_decision = lit ? vec4(1.0, 0.0, 0.0, 0.0) : vec4(0.0, 1.0, 0.0, 0.0);
 #ifdef RESULT_ALPHA
     if (!lit) discard;
 #endif

@@ -178,6 +178,9 @@ pub struct Frame {
     pub fallbacks: Vec<crate::plan::fallback::Fallback>,
     /// Per hybrid light, what its classification found and what its mask saved (with masks).
     pub hybrid: Vec<HybridStats>,
+    /// Of `masks`, those read from what the lights' lit passes recorded (`gl::record`); the
+    /// others were drawn again.
+    pub masks_recorded: usize,
     /// Where making the frame waited for the GPU.
     pub syncs: Syncs,
 }

@@ -18,6 +18,7 @@ mod primitive_id_probe;
 pub mod priority_mips;
 pub mod program;
 pub mod query_ring;
+pub mod record;
 pub mod renderer;
 mod scratch;
 pub mod shadow_maps;

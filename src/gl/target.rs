@@ -349,7 +349,7 @@ pub(crate) fn framebuffer_of(
     }
 }
 
-fn check_complete(gl: &glow::Context, what: &str) -> Result<(), String> {
+pub(crate) fn check_complete(gl: &glow::Context, what: &str) -> Result<(), String> {
     // SAFETY: status query of the bound framebuffer.
     let status = unsafe { gl.check_framebuffer_status(glow::FRAMEBUFFER) };
     if status == glow::FRAMEBUFFER_COMPLETE {

@@ -4,6 +4,7 @@ pub mod enclosure;
 pub mod masks;
 pub mod measure;
 pub mod metrics;
+pub mod recorded;
 pub mod reference;
 pub mod sampled;
 pub mod subdivision;

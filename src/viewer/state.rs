@@ -213,6 +213,7 @@ impl ViewerState {
             && self.error_job.is_none();
         FrameRequest {
             masks: wants_error && self.walkthrough.is_none(),
+            masks_drawn_again: false,
             stop_after: self.walkthrough,
             stencil_of: (self.view == ViewMode::Stencil).then_some(self.selected_light),
             // The selected light's volumes: all lights' at once hide each other.

@@ -21,6 +21,7 @@ impl<'a> FrameRun<'a> {
                 maps
             };
             set_scissor(self.ctx.gl, lp.scissor);
+            self.assign_layer(lp);
             if lp.technique == Technique::Hybrid {
                 if let Some(image) = go_on!(self.hybrid_light(pi, maps)) {
                     stencil_image = Some(image);
@@ -45,13 +46,17 @@ impl<'a> FrameRun<'a> {
                 }
                 match self.fixed {
                     Some(ff) => fixed_maps(&self.ctx, ff, lp, &bindings, false),
-                    None => draw_maps(
-                        &self.ctx,
-                        lp,
-                        &bindings,
-                        |v| self.lit_program(v),
-                        (MapPass::Lit, false),
-                    ),
+                    None => {
+                        let recording = self.begin_record(lp);
+                        draw_maps(
+                            &self.ctx,
+                            lp,
+                            &bindings,
+                            |v| self.lit_program(v),
+                            (MapPass::Lit, false),
+                        );
+                        self.end_record(recording);
+                    }
                 }
                 go_on!(self.step(StepKind::Lit, Some(lp), None, Self::color_image));
                 if self.mask_in_frame(lp) {
@@ -251,16 +256,20 @@ impl<'a> FrameRun<'a> {
         let shadow = LitShadow::Stencil { test };
         match self.fixed {
             Some(ff) => fixed::lit::draw(&self.ctx, ff, lp, &shadow, &lp.receivers),
-            None => passes::lit::draw(
-                &self.ctx,
-                self.lit_program(LitVariant::plain(false)),
-                lp,
-                &shadow,
-                (
-                    &lp.receivers,
-                    Marks::of(self.ctx.settings.lighting.light_once, 1),
-                ),
-            ),
+            None => {
+                let recording = self.begin_record(lp);
+                passes::lit::draw(
+                    &self.ctx,
+                    self.lit_program(LitVariant::plain(false)),
+                    lp,
+                    &shadow,
+                    (
+                        &lp.receivers,
+                        Marks::of(self.ctx.settings.lighting.light_once, 1),
+                    ),
+                );
+                self.end_record(recording);
+            }
         }
         self.step(StepKind::Lit, Some(lp), None, Self::color_image)
     }

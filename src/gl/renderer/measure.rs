@@ -1,6 +1,7 @@
 //! After the timed frame, when asked: the G-buffer and each light's decision mask.
 
 use super::*;
+use crate::truth::recorded::reaches;
 impl<'a> FrameRun<'a> {
     /// The G-buffer and each light's decision mask, when the request asks for masks
     /// (untimed, after the frame).
@@ -20,6 +21,10 @@ impl<'a> FrameRun<'a> {
         let mut masks = Vec::with_capacity(plan.lights.len() + plan.culled.len());
         let mut drawn = std::mem::take(&mut self.masks_in_frame);
         for (pi, lp) in plan.lights.iter().enumerate() {
+            if let Some(mask) = self.recorded_mask(lp, &gbuffer) {
+                masks.push(mask);
+                continue;
+            }
             if let Some(i) = drawn.iter().position(|m| m.light == lp.light) {
                 masks.push(drawn.swap_remove(i));
                 continue;
@@ -79,7 +84,11 @@ impl<'a> FrameRun<'a> {
         let redone_after = self.volumes_of(lp).is_some()
             || self.fragments_of(lp).is_some()
             || (self.ctx.plan.maps_per_light && lp.technique.uses_maps());
-        self.request.masks && self.measure_targets.is_some() && self.fixed.is_none() && redone_after
+        self.request.masks
+            && self.measure_targets.is_some()
+            && self.fixed.is_none()
+            && self.layer_of(lp).is_none()
+            && redone_after
     }
 
     /// Light `lp`'s mask drawn now by `draw` into the mask target (over the frame's depth and
@@ -257,12 +266,7 @@ fn clear_mask(gl: &glow::Context, scissor: Option<Scissor>) {
 
 pub(super) fn keep_reached(values: &mut [u8], gbuffer: &GBuffer, light: &crate::scene::Light) {
     for (i, v) in values.iter_mut().enumerate() {
-        let reached = gbuffer.is_receiver_surface(i) && {
-            let p = glam::Vec3::from_array(gbuffer.position[i]).as_dvec3();
-            let n = glam::Vec3::from_array(gbuffer.normal[i]).as_dvec3();
-            light.reaches(p, n)
-        };
-        if !reached {
+        if !reaches(light, gbuffer, i) {
             *v = MaskValue::NotReceiver as u8;
         }
     }

@@ -17,6 +17,7 @@ use super::passes::shadow_map::{DepthTarget, copies_from_frame, copy_depth};
 use super::passes::{self, PassContext, set_scissor};
 use super::priority_mips;
 use super::program::{Program, ProgramError, sources};
+use super::record::DecisionRecord;
 use super::shadow_maps::{MapKey, ShadowMaps};
 use super::syncs::{self, SyncKind};
 use super::target::{Framebuffer, GBufferTarget, MaskTarget};
@@ -66,11 +67,13 @@ mod lights;
 mod maps;
 mod measure;
 mod programs;
+mod record;
 mod volumes;
 
 use maps::{MapPass, draw_maps, fixed_maps, lit_passes};
 pub use programs::FILL_SHADE;
 use programs::{LitVariant, Programs, lit_defines};
+use record::RecordedLight;
 
 #[derive(Debug, Error)]
 pub enum RenderError {
@@ -91,10 +94,15 @@ pub enum RenderError {
 /// What a frame should produce besides its image and timings.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
 pub struct FrameRequest {
-    /// The G-buffer and each light's decision mask, untimed: a light whose mask reads work the
-    /// frame would otherwise do again (its counted stencil, maps drawn just before its pass)
-    /// gets it drawn right after that work, the others after the frame.
+    /// The G-buffer and each light's decision mask, untimed: a light's lit pass records its
+    /// decisions as it shades (`gl::record`), read back after the frame; a light it cannot
+    /// record (hybrid, the fill shading, the legacy pipeline, beyond the record's budget)
+    /// gets its mask drawn again, right after the work it reads (its counted stencil, maps
+    /// drawn just before its pass) or after the frame.
     pub masks: bool,
+    /// Draw every light's mask again rather than read what its lit pass recorded: the
+    /// masks as they were made before the record, to check it against.
+    pub masks_drawn_again: bool,
     /// Stop after this step (walkthrough): the frame then holds the steps so far and the
     /// buffer the step wrote as `step_image`.
     pub stop_after: Option<usize>,
@@ -181,6 +189,8 @@ pub struct Drawer {
     fragments: FragmentBuffers,
     /// Created on the first frame that asks for masks.
     measure_targets: Option<(GBufferTarget, MaskTarget)>,
+    /// The layers lit passes record their decisions into, when masks are asked for.
+    record: Option<DecisionRecord>,
     /// Core profile draws need a bound VAO even without attributes (full-screen triangles).
     empty_vao: glow::VertexArray,
     /// Created on the first frame that reduces its depth for the planner.
@@ -264,6 +274,7 @@ impl Drawer {
             extrusions: Extrusions::default(),
             fragments: FragmentBuffers::default(),
             measure_targets: None,
+            record: None,
             empty_vao,
             depth_reducer: None,
             last_maps: Vec::new(),
@@ -394,6 +405,9 @@ impl Drawer {
                 g.delete(&self.gl);
                 m.delete(&self.gl);
             }
+            if let Some(r) = self.record.take() {
+                r.delete(&self.gl);
+            }
         }
         Ok(())
     }
@@ -448,6 +462,11 @@ impl Drawer {
             variants,
             target: &self.target,
             measure_targets: self.measure_targets.as_ref(),
+            record: self
+                .record
+                .as_ref()
+                .filter(|_| request.masks && !request.masks_drawn_again),
+            recorded: Vec::new(),
             timer: &mut self.timer,
             shadow_maps: &mut self.shadow_maps,
             id_tables: &mut self.id_tables,
@@ -527,7 +546,29 @@ impl Drawer {
             let m = MaskTarget::new(&self.gl, &self.target).map_err(RenderError::Gl)?;
             self.measure_targets = Some((g, m));
         }
+        if request.masks && !request.masks_drawn_again && !settings.fixed_function {
+            self.ensure_record(plan.lights.len())?;
+        }
         Ok(copy)
+    }
+
+    /// A record of as many layers as `lights` want (within its budget), the frame's size.
+    fn ensure_record(&mut self, lights: usize) -> Result<(), RenderError> {
+        let size = (self.target.width, self.target.height);
+        let layers = DecisionRecord::layers_for(&self.gl, size, lights);
+        let fits = self
+            .record
+            .as_ref()
+            .is_some_and(|r| (r.width, r.height) == size && r.layers >= layers);
+        if !fits {
+            if let Some(r) = self.record.take() {
+                r.delete(&self.gl);
+            }
+            let r =
+                DecisionRecord::new(&self.gl, size.0, size.1, layers).map_err(RenderError::Gl)?;
+            self.record = Some(r);
+        }
+        Ok(())
     }
 
     /// The framebuffer maps are copied from when they are drawn between lights' passes:
@@ -689,6 +730,10 @@ pub(crate) struct FrameRun<'a> {
     variants: HashMap<LitVariant, String>,
     target: &'a Framebuffer,
     measure_targets: Option<&'a (GBufferTarget, MaskTarget)>,
+    /// Where lit passes record their decisions in this frame (`gl::record`).
+    record: Option<&'a DecisionRecord>,
+    /// The lights recorded so far, each with its layer.
+    recorded: Vec<RecordedLight>,
     timer: &'a mut PassTimer,
     shadow_maps: &'a mut ShadowMaps,
     id_tables: &'a mut IdTables,
@@ -767,6 +812,10 @@ impl<'a> FrameRun<'a> {
             false => self.color_image(),
         };
         let (gbuffer, masks, hybrid) = self.measure(&maps);
+        let masks_recorded = match gbuffer {
+            Some(_) => self.recorded.len(),
+            None => 0,
+        };
         let plan = self.ctx.plan;
         Ok(Frame {
             image,
@@ -791,6 +840,7 @@ impl<'a> FrameRun<'a> {
             },
             fallbacks: Vec::new(),
             hybrid,
+            masks_recorded,
             syncs: Syncs::default(),
         })
     }
@@ -850,6 +900,7 @@ impl<'a> FrameRun<'a> {
             cache: CacheStats::default(),
             fallbacks: Vec::new(),
             hybrid: Vec::new(),
+            masks_recorded: 0,
             syncs: Syncs::default(),
         }
     }
@@ -892,6 +943,9 @@ impl Drop for Drawer {
         if let Some((g, m)) = self.measure_targets.take() {
             g.delete(gl);
             m.delete(gl);
+        }
+        if let Some(r) = self.record.take() {
+            r.delete(gl);
         }
         if let Some(r) = self.depth_reducer.take() {
             r.delete(gl);

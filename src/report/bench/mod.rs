@@ -504,6 +504,7 @@ struct Timed {
 /// or read queries at the frame's end) and no pixels, so the frame itself waits for nothing.
 const TIMED: FrameRequest = FrameRequest {
     masks: false,
+    masks_drawn_again: false,
     stop_after: None,
     stencil_of: None,
     overlays: crate::gl::Overlays {
