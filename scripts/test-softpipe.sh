@@ -4,7 +4,8 @@
 # llvmpipe): context paths, fallbacks, the depth-bounds test where it runs, the fixed-function
 # pipeline, EGL against OSMesa and the window, the README's figures, and the built-in scene's
 # shadow volumes and maps (with the texgen precision case on oa_dm3), maps drawn per light within
-# the map budget. .ci/run runs it after the
+# the map budget, and the decisions the lit pass records against the masks drawn again (the
+# paper's frame, subdivision, the G-buffer read where the sample picks). .ci/run runs it after the
 # README's test command; docs/drivers.md says what differs between the drivers.
 #
 #   scripts/test-softpipe.sh            (after a release build of the tests, or it builds them)
@@ -39,4 +40,6 @@ run shadow_map -- copy_and_fbo hardware_and_shader alpha_and_intensity light_rel
 # could draw differently. The other cases count textures reused and renderers grouped (the
 # same on every driver) and take minutes here.
 run map_budget -- maps_drawn_per_light_within_the_budget a_renderer_released_between_configurations
+# The decisions the lit pass records: the five scenes' and the hard cases' take minutes here.
+run recorded_masks -- shader_decides the_g_buffer
 echo "== softpipe pass: $(( $(date +%s) - total )) s"

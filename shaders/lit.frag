@@ -164,6 +164,9 @@ layout(location = 0) out vec4 o_color;
 // The decision, recorded where the frame attaches a layer for this light (gl/record.rs):
 // (1, 0) lit, (0, 1) shadowed, added as the light is.
 layout(location = 1) out vec4 o_decision;
+// While recording, the alpha test's rejected (shadowed) fragments add nothing instead of
+// leaving, so their decision is recorded: the frame looks the same.
+uniform bool u_keep_shadowed;
 #endif
 
 // The surface's normal on the side the camera sees: two-sided surfaces are lit on that side.
@@ -268,7 +271,11 @@ void main() {
 #else
     o_decision = lit ? vec4(1.0, 0.0, 0.0, 0.0) : vec4(0.0, 1.0, 0.0, 0.0);
 #ifdef RESULT_ALPHA
-    if (!lit) discard;
+    if (!lit) {
+        if (!u_keep_shadowed) discard;
+        o_color = vec4(0.0);
+        return;
+    }
 #endif
     o_color = vec4(albedo.rgb * u_light_color * diffuse * scale, 1.0);
 #ifdef TEXEL_GRID

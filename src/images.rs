@@ -137,6 +137,39 @@ impl GBuffer {
     }
 }
 
+/// The G-buffer at some of its pixels (`Renderer::gbuffer_at`): what the sampled reference
+/// reads where it picked, without the whole G-buffer read back.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct GBufferPicks {
+    /// Row-major pixel indices (top row first), sorted, each once.
+    pub pixels: Vec<u32>,
+    pub position: Vec<[f32; 3]>,
+    pub normal: Vec<[f32; 3]>,
+    /// As [`GBuffer::kind`].
+    pub kind: Vec<u8>,
+}
+
+/// A G-buffer, whole or at picked pixels: the surface a pixel shows.
+pub trait Surfaces: Sync {
+    /// The point and normal of the surface pixel `i` shows, when it receives dynamic light
+    /// (None: background, a surface that does not, or a pixel not read).
+    fn receiver_at(&self, i: usize) -> Option<([f32; 3], [f32; 3])>;
+}
+
+impl Surfaces for GBuffer {
+    fn receiver_at(&self, i: usize) -> Option<([f32; 3], [f32; 3])> {
+        self.is_receiver_surface(i)
+            .then(|| (self.position[i], self.normal[i]))
+    }
+}
+
+impl Surfaces for GBufferPicks {
+    fn receiver_at(&self, i: usize) -> Option<([f32; 3], [f32; 3])> {
+        let k = self.pixels.binary_search(&(i as u32)).ok()?;
+        (self.kind[k] == 1).then(|| (self.position[k], self.normal[k]))
+    }
+}
+
 /// A light's stencil counts after its volume pass (row-major, top row first).
 #[derive(Debug, Clone, PartialEq)]
 pub struct StencilImage {

@@ -9,6 +9,7 @@ use common::{gl_on, load_asset, load_scene_file, options_with};
 use shadowlab::frame::Frame;
 use shadowlab::options::{BackendChoice, Candidate, MapBuffer, Options, Technique};
 use shadowlab::plan::auto::CostSource;
+use shadowlab::report::estimate::GBufferRead::{Picks, Whole};
 use shadowlab::report::estimate::{learn_auto, sampled_frame};
 use shadowlab::run::{FrameRequest, Renderer};
 use shadowlab::scene::{Scene, path};
@@ -47,7 +48,7 @@ fn cheaper(technique: Technique, ratio: f64) -> CostSource {
 fn learnt(renderer: &mut Renderer, scene: &Scene, o: &Options, reference: &Reference) -> Frame {
     renderer.load_scene(scene).unwrap();
     learn_auto(renderer, scene, o, Some(reference)).unwrap();
-    sampled_frame(renderer, scene, &scene.camera, o, reference, 99)
+    sampled_frame(renderer, scene, &scene.camera, o, reference, (99, Whole))
         .unwrap()
         .frame
 }
@@ -228,7 +229,7 @@ fn auto_on_oa_dm1_takes_the_cheaper_technique_that_meets_the_target_and_holds_it
                 &scene.camera,
                 &o,
                 &reference,
-                100 + i,
+                (100 + i, Picks),
             )
             .unwrap()
             .frame;
@@ -276,9 +277,16 @@ fn auto_leaves_a_technique_when_its_measured_error_rises() {
     let mut ran = Vec::new();
     let mut last = None;
     for i in 0..10 {
-        let f = sampled_frame(&mut renderer, &scene, &scene.camera, &o, &reference, 10 + i)
-            .unwrap()
-            .frame;
+        let f = sampled_frame(
+            &mut renderer,
+            &scene,
+            &scene.camera,
+            &o,
+            &reference,
+            (10 + i, Whole),
+        )
+        .unwrap()
+        .frame;
         ran.push(techniques(&f)[&0]);
         last = Some(f);
     }

@@ -102,21 +102,23 @@ fn compare(scene: &Scene, o: &Options, what: &str) -> Differences {
     d
 }
 
-/// What the record must hold to: no receiver of one mask that the other lacks, no decision
-/// that differs away from a shadow's edge, and on the edges at most one pixel in 20 000
-/// receivers. Why any at all: the lit program and the mask program are compiled from
-/// different defines, and where a map's compare is a tie a rasteriser's compiler may round
-/// the two differently (oa_dm1's light 1: one pixel of 252 257 receivers, on an edge).
+/// What the record must hold to: no decision that differs away from a shadow's edge, and at
+/// most one pixel in 20 000 receivers either differing on an edge or a receiver in one mask
+/// only. Why any at all: the lit program and the mask program are compiled from different
+/// defines, and where a map's compare or the light's reach test is a tie a rasteriser's
+/// compiler may round the two differently (llvmpipe: oa_dm1's light 1, one pixel of 252 257
+/// receivers, on an edge; softpipe: one pixel of suspended's 63 871 a receiver in one only).
 fn assert_same(d: Differences, what: &str) {
     assert!(
         d.receivers > 1000,
         "{what}: too few receivers to judge ({d:?})"
     );
-    assert_eq!((d.reach, d.flipped), (0, 0), "{what}: {d:?}");
+    assert_eq!(d.flipped, 0, "{what}: {d:?}");
     assert!(
-        d.flipped_on_edges <= d.receivers / 20_000,
-        "{what}: {} decisions on edges differ ({d:?})",
-        d.flipped_on_edges
+        d.flipped_on_edges + d.reach <= d.receivers / 20_000,
+        "{what}: {} decisions on edges and {} receivers differ ({d:?})",
+        d.flipped_on_edges,
+        d.reach
     );
 }
 
@@ -170,15 +172,19 @@ fn recorded_masks_are_the_masks_drawn_again_on_the_hard_cases() {
 }
 
 #[test]
-fn recorded_masks_hold_where_the_lit_pass_drops_shadowed_fragments() {
-    // The alpha test drops shadowed fragments (`shadow_map.result = alpha`), as the stencil
-    // does under volumes: there the light's reach decides what its pass left undrawn. The
-    // paper's frame too (the preset), and the subdivision's stencil.
+fn recorded_masks_hold_where_the_shader_decides_and_on_the_papers_frame() {
+    // `shadow_map.result = intensity`: the lit pass keeps shadowed fragments, scaled (under
+    // the default `alpha` the alpha test rejects them, kept while recording to add nothing).
+    // The paper's frame too (the preset), and the subdivision's stencil (which drops them, as
+    // volumes' does: the G-buffer's reach bits find them).
     let (scene, _, base) = common::load_scene_file("q3dm6ish");
     let mut paper = base.clone();
     Preset::Paper.apply(&mut paper).unwrap();
     let cases: [(&Options, &[&str]); 4] = [
-        (&base, &["technique=shadow_map", "shadow_map.result=alpha"]),
+        (
+            &base,
+            &["technique=shadow_map", "shadow_map.result=intensity"],
+        ),
         (&paper, &[]),
         (&paper, &["technique=shadow_map"]),
         (&base, &["technique=subdivision"]),
@@ -186,5 +192,52 @@ fn recorded_masks_hold_where_the_lit_pass_drops_shadowed_fragments() {
     for (from, sets) in cases {
         let what = format!("q3dm6ish {sets:?}");
         assert_same(compare(&scene, &options_for(from, sets), &what), &what);
+    }
+}
+
+#[test]
+fn the_g_buffer_read_where_the_sample_picks_samples_as_the_whole_one_does() {
+    use shadowlab::truth::Reference;
+    use shadowlab::truth::sampled::{frame_picks, picked_pixels, sample_frame};
+    let (scene, _, base) = common::load_scene_file("oa_dm1");
+    let reference = Reference::build(&scene);
+    for t in ["shadow_map", "shadow_volume"] {
+        let o = options_for(&base, &[&format!("technique={t}")]);
+        let (_ctx, mut r) = common::gl_on(BackendChoice::Egl, &o);
+        r.load_scene(&scene).unwrap();
+        let frame = |kept: bool, r: &mut shadowlab::run::Renderer| {
+            r.render_with(
+                &scene,
+                &o,
+                FrameRequest {
+                    masks: true,
+                    gbuffer_kept: kept,
+                    ..FrameRequest::default()
+                },
+            )
+            .unwrap_or_else(|e| panic!("{t}: {e}"))
+        };
+        let whole = frame(false, &mut r);
+        let kept = frame(true, &mut r);
+        assert!(kept.gbuffer.is_none(), "{t}: the G-buffer stays on the GPU");
+        let gbuffer = whole.gbuffer.as_ref().unwrap();
+        let (n, seed) = (64, 7);
+        let pixels = picked_pixels(&frame_picks(&scene.lights, &kept.masks, n, seed, 3));
+        assert!(pixels.len() > 100, "{t}: {} pixels picked", pixels.len());
+        let picks = r.gbuffer_at(pixels.clone()).unwrap();
+        assert_eq!(picks.pixels, pixels);
+        for (k, &i) in pixels.iter().enumerate() {
+            let i = i as usize;
+            assert_eq!(
+                (picks.position[k], picks.normal[k], picks.kind[k]),
+                (gbuffer.position[i], gbuffer.normal[i], gbuffer.kind[i]),
+                "{t}: pixel {i}"
+            );
+        }
+        let lights = &scene.lights;
+        let over_whole = sample_frame(&reference, gbuffer, lights, &whole.masks, n, seed, 3);
+        let over_picks = sample_frame(&reference, &picks, lights, &kept.masks, n, seed, 3);
+        assert!(over_whole.rays > 100, "{t}: {} rays", over_whole.rays);
+        assert_eq!(over_whole, over_picks, "{t}");
     }
 }

@@ -8,7 +8,7 @@ use shadowlab::gl::FrameRequest;
 use shadowlab::options::{Options, Technique};
 use shadowlab::plan::auto::learning_frames;
 use shadowlab::presets::Preset;
-use shadowlab::report::estimate::{learn_auto, sampled_frame};
+use shadowlab::report::estimate::{GBufferRead, learn_auto, sampled_frame};
 use shadowlab::scene::Scene;
 use shadowlab::truth::sampled::FrameSample;
 use shadowlab::truth::{self, Reference, reference};
@@ -304,13 +304,18 @@ pub fn run(common: &CommonArgs, args: &Args) -> Result<()> {
     learn_auto(&mut renderer, &scene, &options, reference.as_ref())?;
     let (frame, sampled) = match reference.as_ref().filter(|_| args.stats) {
         Some(r) => {
+            // Masks and probes read the frame's G-buffer whole.
+            let read = match args.mask.is_some() || !probes.is_empty() {
+                true => GBufferRead::Whole,
+                false => GBufferRead::Picks,
+            };
             let s = sampled_frame(
                 &mut renderer,
                 &scene,
                 &scene.camera,
                 &options,
                 r,
-                learning_frames(&options) as u64,
+                (learning_frames(&options) as u64, read),
             )?;
             (s.frame, Some((s.sample, s.trace_ms)))
         }

@@ -9,6 +9,7 @@ pub mod egl;
 pub mod extrusion;
 pub mod fixed;
 pub mod fragments;
+pub mod gather;
 pub mod id_tables;
 pub mod legacy;
 mod offset_probe;

@@ -43,6 +43,9 @@ pub mod sources {
     pub const FRAGMENTS_VERT: &str = include_str!("../../shaders/fragments.vert");
     pub const FULLSCREEN_VERT: &str = include_str!("../../shaders/fullscreen.vert");
     pub const FILL_FRAG: &str = include_str!("../../shaders/fill.frag");
+    pub const GATHER_VERT: &str = include_str!("../../shaders/gather.vert");
+    pub const GATHER_FRAG: &str = include_str!("../../shaders/gather.frag");
+    pub const RECORD_REACH_FRAG: &str = include_str!("../../shaders/record_reach.frag");
     pub const DEPTH_REDUCE_FRAG: &str = include_str!("../../shaders/depth_reduce.frag");
     pub const PRIORITY_MIPS_FRAG: &str = include_str!("../../shaders/priority_mips.frag");
     pub const DEBUG_VOLUME_VERT: &str = include_str!("../../shaders/debug_volume.vert");

@@ -127,8 +127,8 @@ impl DecisionRecord {
         }
     }
 
-    /// Layer `layer`, top row first, a (lit, shadowed) pair per pixel.
-    pub fn read(&self, gl: &glow::Context, layer: u32) -> Vec<[u8; 2]> {
+    /// Binds `layer` as the colour of the record's own framebuffer, to draw into it.
+    pub fn bind_layer(&self, gl: &glow::Context, layer: u32) {
         // SAFETY: our own framebuffer and texture.
         unsafe {
             gl.bind_framebuffer(glow::FRAMEBUFFER, Some(self.read_fbo));
@@ -139,7 +139,13 @@ impl DecisionRecord {
                 0,
                 layer as i32,
             );
+            gl.viewport(0, 0, self.width as i32, self.height as i32);
         }
+    }
+
+    /// Layer `layer`, top row first, a (lit, shadowed) pair per pixel.
+    pub fn read(&self, gl: &glow::Context, layer: u32) -> Vec<[u8; 2]> {
+        self.bind_layer(gl, layer);
         let bytes: Vec<u8> = read_pixels(
             gl,
             Some(self.read_fbo),

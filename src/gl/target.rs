@@ -191,17 +191,18 @@ pub fn read_pixels_bottom_up<T: Copy + Default>(
     (format, ty): (u32, u32),
     per_pixel: usize,
 ) -> Vec<T> {
-    let channels = match format {
-        glow::RED => 1,
-        glow::RG => 2,
-        _ => 0,
+    let (channels, rgba) = match format {
+        glow::RED => (1, glow::RGBA),
+        glow::RG => (2, glow::RGBA),
+        glow::RED_INTEGER => (1, glow::RGBA_INTEGER),
+        _ => (0, format),
     };
     if channels == 0 || !gl.version().is_embedded {
         return read_as_asked(gl, fbo, buffer, size, (format, ty), per_pixel);
     }
     // Values of T per channel, then per RGBA pixel.
     let per_channel = per_pixel / channels;
-    let rgba: Vec<T> = read_as_asked(gl, fbo, buffer, size, (glow::RGBA, ty), 4 * per_channel);
+    let rgba: Vec<T> = read_as_asked(gl, fbo, buffer, size, (rgba, ty), 4 * per_channel);
     rgba.chunks_exact(4 * per_channel)
         .flat_map(|p| p[..per_pixel].iter().copied())
         .collect()
@@ -361,11 +362,13 @@ pub(crate) fn check_complete(gl: &glow::Context, what: &str) -> Result<(), Strin
     }
 }
 
-/// G-buffer for the exact reference: world position and normal as 32-bit floats, own depth.
+/// G-buffer for the exact reference: world position and normal as 32-bit floats, which of
+/// the recording lights reach each pixel (a bit each), own depth.
 pub struct GBufferTarget {
     pub fbo: glow::Framebuffer,
     position: glow::Texture,
     normal: glow::Texture,
+    reach: glow::Texture,
     depth: glow::Texture,
     pub width: u32,
     pub height: u32,
@@ -375,6 +378,14 @@ impl GBufferTarget {
     pub fn new(gl: &glow::Context, width: u32, height: u32) -> Result<GBufferTarget, String> {
         let position = texture_2d(gl, glow::RGBA32F, glow::RGBA, glow::FLOAT, width, height)?;
         let normal = texture_2d(gl, glow::RGBA32F, glow::RGBA, glow::FLOAT, width, height)?;
+        let reach = texture_2d(
+            gl,
+            glow::R32UI,
+            glow::RED_INTEGER,
+            glow::UNSIGNED_INT,
+            width,
+            height,
+        )?;
         let depth = texture_2d(
             gl,
             glow::DEPTH_COMPONENT24,
@@ -387,11 +398,12 @@ impl GBufferTarget {
         unsafe {
             let fbo = gl.create_framebuffer()?;
             gl.bind_framebuffer(glow::FRAMEBUFFER, Some(fbo));
-            for (attachment, tex) in [
+            let colours = [
                 (glow::COLOR_ATTACHMENT0, position),
                 (glow::COLOR_ATTACHMENT1, normal),
-                (glow::DEPTH_ATTACHMENT, depth),
-            ] {
+                (glow::COLOR_ATTACHMENT2, reach),
+            ];
+            for (attachment, tex) in colours.into_iter().chain([(glow::DEPTH_ATTACHMENT, depth)]) {
                 gl.framebuffer_texture_2d(
                     glow::FRAMEBUFFER,
                     attachment,
@@ -400,16 +412,17 @@ impl GBufferTarget {
                     0,
                 );
             }
-            gl.draw_buffers(&[glow::COLOR_ATTACHMENT0, glow::COLOR_ATTACHMENT1]);
+            gl.draw_buffers(&colours.map(|c| c.0));
+            let ok = check_complete(gl, "G-buffer");
             let t = GBufferTarget {
                 fbo,
                 position,
                 normal,
+                reach,
                 depth,
                 width,
                 height,
             };
-            let ok = check_complete(gl, "G-buffer");
             gl.bind_framebuffer(glow::FRAMEBUFFER, None);
             if let Err(e) = ok {
                 t.delete(gl);
@@ -431,12 +444,30 @@ impl GBufferTarget {
         )
     }
 
+    /// The reach bits, top row first.
+    pub fn read_reach(&self, gl: &glow::Context) -> Vec<u32> {
+        read_pixels(
+            gl,
+            Some(self.fbo),
+            Some(glow::COLOR_ATTACHMENT2),
+            (self.width, self.height),
+            (glow::RED_INTEGER, glow::UNSIGNED_INT),
+            1,
+        )
+    }
+
+    /// The position and normal textures.
+    pub fn textures(&self) -> (glow::Texture, glow::Texture) {
+        (self.position, self.normal)
+    }
+
     pub fn delete(&self, gl: &glow::Context) {
         // SAFETY: called once by the owner.
         unsafe {
             gl.delete_framebuffer(self.fbo);
             gl.delete_texture(self.position);
             gl.delete_texture(self.normal);
+            gl.delete_texture(self.reach);
             gl.delete_texture(self.depth);
         }
     }

@@ -388,11 +388,12 @@ impl GpuScene {
 /// Data a GL buffer may hold as its bytes: `repr(C)` or primitive, without padding.
 pub(crate) trait Plain: Copy {}
 impl Plain for u32 {}
+impl Plain for f32 {}
 impl Plain for [f32; 4] {}
 impl Plain for Vertex {}
 
 /// `data` as the bytes a GL buffer takes.
-fn bytes_of<T: Plain>(data: &[T]) -> &[u8] {
+pub(crate) fn bytes_of<T: Plain>(data: &[T]) -> &[u8] {
     // SAFETY: T has no padding (see `Plain`), so every byte of the slice is initialised.
     unsafe { std::slice::from_raw_parts(data.as_ptr() as *const u8, std::mem::size_of_val(data)) }
 }

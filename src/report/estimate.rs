@@ -2,13 +2,15 @@
 //! reference (`truth::sampled`), and the errors given to `technique = auto`.
 
 use crate::frame::Frame;
-use crate::images::GBuffer;
+use crate::images::{GBuffer, GBufferPicks};
 use crate::options::{Options, Technique};
 use crate::plan::auto::learning_frames;
 use crate::run::{FrameRequest, RenderError, Renderer};
 use crate::scene::{Camera, Scene};
 use crate::truth::Reference;
-use crate::truth::sampled::{FrameSample, sample_frame};
+use crate::truth::sampled::{
+    FrameSample, Picks, frame_picks, picked_pixels, sample_frame, sample_picked,
+};
 use std::time::Instant;
 
 /// How many times `estimate.samples` the learning frames trace.
@@ -32,27 +34,64 @@ pub fn gbuffer_of(frame: &Frame) -> Result<&GBuffer, RenderError> {
         .ok_or(RenderError::Gl("the renderer returned no G-buffer".into()))
 }
 
+/// The picks of a frame whose G-buffer stayed on the GPU, and the G-buffer read at them.
+pub struct Gathered {
+    pub picks: Vec<Picks>,
+    pub gbuffer: GBufferPicks,
+}
+
 /// Samples a frame rendered with masks (`options.estimate.samples` pixels per light; `index`
-/// numbers the frame's random streams); also gives the milliseconds the tracing took.
+/// numbers the frame's random streams) over its G-buffer, or at the picks `gathered` read
+/// where it stayed on the GPU ([`gather_picks`]); also gives the milliseconds the tracing
+/// took.
 pub fn sample_masks(
     reference: &Reference,
+    scene: &Scene,
+    (frame, gathered): (&Frame, Option<&Gathered>),
+    options: &Options,
+    index: u64,
+) -> Result<(FrameSample, f64), RenderError> {
+    let start = Instant::now();
+    let (lights, masks) = (&scene.lights, &frame.masks);
+    let sample = match gathered {
+        Some(g) => sample_picked(reference, &g.gbuffer, lights, masks, &g.picks),
+        None => {
+            let (n, seed) = (options.estimate.samples, options.estimate.seed);
+            let gbuffer = gbuffer_of(frame)?;
+            let (n, seed) = (n as usize, u64::from(seed));
+            sample_frame(reference, gbuffer, lights, masks, n, seed, index)
+        }
+    };
+    Ok((sample, start.elapsed().as_secs_f64() * 1e3))
+}
+
+/// The picks [`sample_masks`] will trace and the G-buffer read at them through `renderer`,
+/// when the frame left it on the GPU (`FrameRequest::gbuffer_kept`); None when the frame has
+/// it whole.
+pub fn gather_picks(
+    renderer: &mut Renderer,
     scene: &Scene,
     frame: &Frame,
     options: &Options,
     index: u64,
-) -> Result<(FrameSample, f64), RenderError> {
-    let gbuffer = gbuffer_of(frame)?;
-    let start = Instant::now();
-    let sample = sample_frame(
-        reference,
-        gbuffer,
-        &scene.lights,
-        &frame.masks,
-        options.estimate.samples as usize,
-        u64::from(options.estimate.seed),
-        index,
-    );
-    Ok((sample, start.elapsed().as_secs_f64() * 1e3))
+) -> Result<Option<Gathered>, RenderError> {
+    if frame.gbuffer.is_some() {
+        return Ok(None);
+    }
+    let n = options.estimate.samples as usize;
+    let seed = u64::from(options.estimate.seed);
+    let picks = frame_picks(&scene.lights, &frame.masks, n, seed, index);
+    let gbuffer = renderer.gbuffer_at(picked_pixels(&picks))?;
+    Ok(Some(Gathered { picks, gbuffer }))
+}
+
+/// How much of the G-buffer a sampled frame reads back.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum GBufferRead {
+    /// Only the pixels the sample traces (`Frame::gbuffer` stays None).
+    Picks,
+    /// All of it, for a caller that uses the frame's G-buffer besides the sample.
+    Whole,
 }
 
 /// Renders a frame of `scene` from `camera` with its masks and samples them (see
@@ -63,7 +102,7 @@ pub fn render_sampled(
     camera: &Camera,
     options: &Options,
     reference: &Reference,
-    (index, frame_only): (u64, bool),
+    (index, frame_only, read): (u64, bool, GBufferRead),
 ) -> Result<SampledFrame, RenderError> {
     let start = Instant::now();
     let frame = renderer.render_at(
@@ -73,12 +112,21 @@ pub fn render_sampled(
         FrameRequest {
             masks: true,
             frame_only,
+            gbuffer_kept: read == GBufferRead::Picks,
             ..FrameRequest::default()
         },
     )?;
-    // The masks are drawn after the timed frame: the rest of the call is their cost.
+    let gathered = gather_picks(renderer, scene, &frame, options, index)?;
+    // The masks (and the G-buffer's picked pixels) are read after the timed frame: the rest
+    // of the call is their cost.
     let masks_ms = (start.elapsed().as_secs_f64() * 1e3 - frame.frame_ms).max(0.0);
-    let (sample, trace_ms) = sample_masks(reference, scene, &frame, options, index)?;
+    let (sample, trace_ms) = sample_masks(
+        reference,
+        scene,
+        (&frame, gathered.as_ref()),
+        options,
+        index,
+    )?;
     Ok(SampledFrame {
         frame,
         sample,
@@ -94,9 +142,16 @@ pub fn sampled_frame(
     camera: &Camera,
     options: &Options,
     reference: &Reference,
-    index: u64,
+    (index, read): (u64, GBufferRead),
 ) -> Result<SampledFrame, RenderError> {
-    let s = render_sampled(renderer, scene, camera, options, reference, (index, false))?;
+    let s = render_sampled(
+        renderer,
+        scene,
+        camera,
+        options,
+        reference,
+        (index, false, read),
+    )?;
     renderer.record_errors(&s.sample.per_light, options);
     Ok(s)
 }
@@ -120,7 +175,8 @@ pub fn learn_auto(
     for i in 0..learning_frames(options) {
         match reference.filter(|_| options.estimate.samples > 0) {
             Some(r) => {
-                sampled_frame(renderer, scene, &scene.camera, &learning, r, i as u64)?;
+                let at = (i as u64, GBufferRead::Picks);
+                sampled_frame(renderer, scene, &scene.camera, &learning, r, at)?;
             }
             None => {
                 renderer.render_with(scene, options, FrameRequest::default())?;

@@ -14,7 +14,7 @@ use crate::gl::caps::Caps;
 use crate::gl::legacy::Legacy;
 use crate::gl::renderer::FrameRun;
 use crate::gl::syncs::{self, Fence};
-use crate::images::Rgba;
+use crate::images::{GBufferPicks, Rgba};
 use crate::options::{Options, Technique};
 use crate::plan::auto::{AutoMemory, CostSource};
 use crate::plan::fallback::Fallback;
@@ -153,6 +153,12 @@ impl Renderer {
             depth_fits,
             fragment_bytes: self.drawer.fragment_bytes(),
         }
+    }
+
+    /// The G-buffer of the latest frame asked for masks with `FrameRequest::gbuffer_kept`, at
+    /// `pixels` (row-major, top row first, sorted, each once): what a sampler reads.
+    pub fn gbuffer_at(&mut self, pixels: Vec<u32>) -> Result<GBufferPicks, RenderError> {
+        self.drawer.gbuffer_at(pixels)
     }
 
     /// Drops the frusta static omni lights kept (`plan.keep_frusta`): the next frame chooses

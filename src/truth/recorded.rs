@@ -1,9 +1,7 @@
 //! A light's mask from what its own lit pass recorded as it shaded (`gl::record`), read back
 //! after the frame: the same decisions as its mask drawn again, without drawing it.
 
-use crate::images::{GBuffer, Mask, MaskValue};
-use crate::scene::Light;
-use rayon::prelude::*;
+use crate::images::{Mask, MaskValue};
 
 /// What a light's lit pass recorded at one pixel.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -26,19 +24,8 @@ impl Recorded {
     }
 }
 
-/// What a pixel the lit pass did not draw means.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum Undrawn {
-    /// The pass's shader decides every reached fragment: an undrawn pixel is no receiver.
-    NotReceiver,
-    /// The pass drops shadowed fragments before its shader (the stencil test) or with it
-    /// (the alpha test of `shadow_map.result = alpha`): an undrawn pixel the light reaches
-    /// (`Light::reaches`, the test the reference makes) is shadowed.
-    ShadowedWhereReached,
-}
-
-/// Rows and columns, top row first, a light's pass could draw: its scissor (GL's window
-/// coordinates, bottom row first) within the frame, or all of it.
+/// Rows and columns, top row first, a light's pass could draw: its scissor (x, y, width,
+/// height in GL's window coordinates, bottom row first) within the frame, or all of it.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct Rect {
     pub x0: u32,
@@ -48,8 +35,8 @@ pub struct Rect {
 }
 
 impl Rect {
-    pub fn of_scissor(s: Option<crate::plan::scissor::Scissor>, width: u32, height: u32) -> Rect {
-        let Some(s) = s else {
+    pub fn of_scissor(s: Option<[i32; 4]>, width: u32, height: u32) -> Rect {
+        let Some([x, y, w, h]) = s else {
             return Rect {
                 x0: 0,
                 y0: 0,
@@ -58,8 +45,8 @@ impl Rect {
             };
         };
         let clamp = |v: i32, hi: u32| v.clamp(0, hi as i32) as u32;
-        let (x0, x1) = (clamp(s.x, width), clamp(s.x + s.width, width));
-        let (bottom, top) = (clamp(s.y, height), clamp(s.y + s.height, height));
+        let (x0, x1) = (clamp(x, width), clamp(x + w, width));
+        let (bottom, top) = (clamp(y, height), clamp(y + h, height));
         Rect {
             x0,
             y0: height - top,
@@ -69,105 +56,60 @@ impl Rect {
     }
 }
 
-/// Light `index`'s mask over `gbuffer` from `record` (top row first, a (lit, shadowed) pair
-/// per pixel), read within `rect` (the layer's pixels outside it are a former frame's).
+/// Light `index`'s mask of a `width`×`height` frame from `record` (top row first, a (lit,
+/// shadowed) pair per pixel), read within `rect` (the layer's pixels outside it are a former
+/// frame's). A pixel nothing was recorded at is no receiver, but where `reach` (per pixel, top
+/// row first, and the light's bit) says the light reaches it: its pass dropped the shadowed
+/// fragments there, so it is shadowed.
 pub fn mask_from_record(
-    (light, index): (&Light, usize),
-    gbuffer: &GBuffer,
+    index: usize,
+    (width, height): (u32, u32),
     record: &[[u8; 2]],
     rect: Rect,
-    undrawn: Undrawn,
+    reach: Option<(&[u32], u32)>,
 ) -> Mask {
-    let (w, h) = (gbuffer.width, gbuffer.height);
-    let mut values = vec![MaskValue::NotReceiver as u8; (w * h) as usize];
-    let rows = (rect.y0 as usize)..(rect.y1 as usize);
-    let span = (rect.x0 as usize)..(rect.x1 as usize);
-    values
-        .par_chunks_mut(w as usize)
-        .enumerate()
-        .filter(|(y, _)| rows.contains(y))
-        .for_each(|(y, row)| {
-            for x in span.clone() {
-                let i = y * w as usize + x;
-                row[x] = match Recorded::of(record[i]) {
-                    Recorded::Lit => MaskValue::Lit,
-                    Recorded::Shadowed => MaskValue::Shadowed,
-                    Recorded::Nothing
-                        if undrawn == Undrawn::ShadowedWhereReached
-                            && reaches(light, gbuffer, i) =>
-                    {
-                        MaskValue::Shadowed
-                    }
-                    Recorded::Nothing => MaskValue::NotReceiver,
-                } as u8;
-            }
-        });
+    let reached = |i: usize| reach.is_some_and(|(bits, b)| bits[i] >> b & 1 == 1);
+    let w = width as usize;
+    let mut values = vec![MaskValue::NotReceiver as u8; w * height as usize];
+    for y in rect.y0 as usize..rect.y1 as usize {
+        for x in rect.x0 as usize..rect.x1 as usize {
+            let i = y * w + x;
+            values[i] = match Recorded::of(record[i]) {
+                Recorded::Lit => MaskValue::Lit,
+                Recorded::Shadowed => MaskValue::Shadowed,
+                Recorded::Nothing if reached(i) => MaskValue::Shadowed,
+                Recorded::Nothing => MaskValue::NotReceiver,
+            } as u8;
+        }
+    }
     Mask {
         light: index,
-        width: w,
-        height: h,
+        width,
+        height,
         values,
-    }
-}
-
-/// Whether pixel `i` shows a receiving surface `light` reaches.
-pub fn reaches(light: &Light, gbuffer: &GBuffer, i: usize) -> bool {
-    gbuffer.is_receiver_surface(i) && {
-        let p = glam::Vec3::from_array(gbuffer.position[i]).as_dvec3();
-        let n = glam::Vec3::from_array(gbuffer.normal[i]).as_dvec3();
-        light.reaches(p, n)
     }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::plan::scissor::Scissor;
-    use glam::Vec3;
-
-    /// A 4×2 G-buffer of a floor at z = 0 facing up, but pixel 3 (background) and pixel 7
-    /// (a surface that takes no dynamic light).
-    fn floor() -> GBuffer {
-        let n = 8;
-        let mut kind = vec![1; n];
-        kind[3] = 0;
-        kind[7] = 2;
-        GBuffer {
-            width: 4,
-            height: 2,
-            position: (0..n).map(|i| [i as f32, 0.0, 0.0]).collect(),
-            normal: vec![[0.0, 0.0, 1.0]; n],
-            kind,
-        }
-    }
 
     #[test]
     fn a_scissor_counts_rows_from_the_bottom_and_clamps_to_the_frame() {
-        let s = Scissor {
-            x: -2,
-            y: 1,
-            width: 3,
-            height: 10,
-        };
-        let r = Rect::of_scissor(Some(s), 4, 2);
+        let r = Rect::of_scissor(Some([-2, 1, 3, 10]), 4, 2);
         assert_eq!((r.x0, r.x1, r.y0, r.y1), (0, 1, 0, 1));
         let all = Rect::of_scissor(None, 4, 2);
         assert_eq!((all.x0, all.x1, all.y0, all.y1), (0, 4, 0, 2));
     }
 
     #[test]
-    fn undrawn_pixels_are_shadowed_only_where_the_light_reaches_a_receiver() {
-        let g = floor();
-        // Reaches x <= 5 (radius 5.5 from (0, 0, 1)): pixel 3 is background, 6 out of
-        // range, 7 takes no light.
-        let light = Light::omni("l", Vec3::new(0.0, 0.0, 1.0), 5.5);
+    fn a_set_channel_decides_and_outside_the_rectangle_is_no_receiver() {
         let mut record = vec![[0u8, 0u8]; 8];
         record[0] = [1, 0];
         record[1] = [0, 1];
+        // Drawn twice, lit once and shadowed once: the light added, so lit.
         record[2] = [2, 1];
-        let all = Rect::of_scissor(None, 4, 2);
-        let stenciled =
-            mask_from_record((&light, 0), &g, &record, all, Undrawn::ShadowedWhereReached);
+        record[5] = [0, 1];
         let v = |m: &Mask| {
             m.values
                 .iter()
@@ -175,17 +117,21 @@ mod tests {
                 .collect::<Vec<_>>()
         };
         use MaskValue::{Lit as L, NotReceiver as N, Shadowed as S};
-        assert_eq!(v(&stenciled), [L, S, L, N, S, S, N, N]);
-        let shaded = mask_from_record((&light, 0), &g, &record, all, Undrawn::NotReceiver);
-        assert_eq!(v(&shaded), [L, S, L, N, N, N, N, N]);
-        // Outside the rectangle the layer holds a former frame's values: no receiver.
+        let all = Rect::of_scissor(None, 4, 2);
+        let m = mask_from_record(3, (4, 2), &record, all, None);
+        assert_eq!((m.light, m.width, m.height), (3, 4, 2));
+        assert_eq!(v(&m), [L, S, L, N, N, S, N, N]);
+        // Bit 2 set at pixels 0 (lit: stays lit), 3 and 6 (undrawn: shadowed); bit 1 at 4.
+        let bits = [0b100, 0, 0, 0b100, 0b010, 0, 0b110, 0];
+        let m = mask_from_record(3, (4, 2), &record, all, Some((&bits, 2)));
+        assert_eq!(v(&m), [L, S, L, S, N, S, S, N]);
         let left_half = Rect {
             x0: 0,
             y0: 0,
             x1: 2,
             y1: 2,
         };
-        let m = mask_from_record((&light, 0), &g, &record, left_half, Undrawn::NotReceiver);
-        assert_eq!(v(&m), [L, S, N, N, N, N, N, N]);
+        let m = mask_from_record(3, (4, 2), &record, left_half, None);
+        assert_eq!(v(&m), [L, S, N, N, N, S, N, N]);
     }
 }

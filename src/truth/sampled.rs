@@ -14,7 +14,7 @@
 //! conservative. With as many samples as pixels, every pixel is traced and the interval closes.
 
 use super::reference::{Reference, shadow_ray_origin};
-use crate::images::{GBuffer, Mask, MaskValue};
+use crate::images::{Mask, MaskValue, Surfaces};
 use crate::scene::Light;
 use glam::Vec3;
 use rayon::prelude::*;
@@ -143,36 +143,82 @@ pub fn stream(seed: u64, frame: u64, light: usize) -> fastrand::Rng {
 }
 
 /// What the exact reference says at pixel `i`: `None` where the light does not reach it.
-fn exact_at(reference: &Reference, gbuffer: &GBuffer, light: &Light, i: usize) -> Option<bool> {
-    if !gbuffer.is_receiver_surface(i) {
-        return None;
-    }
-    let p = Vec3::from_array(gbuffer.position[i]);
-    let n = Vec3::from_array(gbuffer.normal[i]);
+fn exact_at(
+    reference: &Reference,
+    surfaces: &impl Surfaces,
+    light: &Light,
+    i: usize,
+) -> Option<bool> {
+    let (p, n) = surfaces.receiver_at(i)?;
+    let (p, n) = (Vec3::from_array(p), Vec3::from_array(n));
     if !light.reaches(p.as_dvec3(), n.as_dvec3()) {
         return None;
     }
     Some(reference.occluded(shadow_ray_origin(p, n), light.position.as_dvec3()))
 }
 
-/// Samples light `light`'s rendered `mask` over `gbuffer`: `n` stratified receiver pixels traced
-/// against `reference`.
+/// The pixels of light `light`'s mask a sample traces: `n` stratified picks over its receiver
+/// pixels, with their weights, and how many receiver pixels there are.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Picks {
+    pub light: usize,
+    pub picks: Vec<(u32, f64)>,
+    pub receivers: usize,
+}
+
+/// `mask`'s picks for `n` samples from `rng`.
+pub fn picks_of(mask: &Mask, n: usize, rng: &mut fastrand::Rng) -> Picks {
+    let pixels = receivers_in_tile_order(mask);
+    Picks {
+        light: mask.light,
+        picks: stratified(&pixels, n, rng),
+        receivers: pixels.len(),
+    }
+}
+
+/// The picks of a frame's masks (those of lights in `lights`; `frame` numbers it for the
+/// random streams): what [`sample_frame`] traces.
+pub fn frame_picks(
+    lights: &[Light],
+    masks: &[Mask],
+    n: usize,
+    seed: u64,
+    frame: u64,
+) -> Vec<Picks> {
+    masks
+        .iter()
+        .filter(|m| m.light < lights.len())
+        .map(|m| picks_of(m, n, &mut stream(seed, frame, m.light)))
+        .collect()
+}
+
+/// Every pixel of `picks`, sorted, each once: what a sample reads of the G-buffer.
+pub fn picked_pixels(picks: &[Picks]) -> Vec<u32> {
+    let mut pixels: Vec<u32> = picks
+        .iter()
+        .flat_map(|p| p.picks.iter().map(|&(i, _)| i))
+        .collect();
+    pixels.sort_unstable();
+    pixels.dedup();
+    pixels
+}
+
+/// Samples light `light`'s rendered `mask` over the G-buffer's `surfaces` at its `picks`,
+/// traced against `reference`.
 pub fn sample_light(
     reference: &Reference,
-    gbuffer: &GBuffer,
+    surfaces: &impl Surfaces,
     light: &Light,
     mask: &Mask,
-    n: usize,
-    rng: &mut fastrand::Rng,
+    picks: &Picks,
 ) -> LightSample {
-    let pixels = receivers_in_tile_order(mask);
-    let picks = stratified(&pixels, n, rng);
-    let exact = picks.len() == pixels.len();
+    let (picks, pixels) = (&picks.picks, picks.receivers);
+    let exact = picks.len() == pixels;
     // (weight, wrong) per pick the reference also counts as a receiver.
     let judged: Vec<(f64, bool)> = picks
         .par_iter()
         .filter_map(|&(i, w)| {
-            let shadowed = exact_at(reference, gbuffer, light, i as usize)?;
+            let shadowed = exact_at(reference, surfaces, light, i as usize)?;
             let rendered_shadowed = mask.values[i as usize] == MaskValue::Shadowed as u8;
             Some((w, shadowed != rendered_shadowed))
         })
@@ -191,7 +237,7 @@ pub fn sample_light(
     // The picks' weights sum to the mask's receivers; the kept ones estimate the shared ones.
     let picked_w: f64 = picks.iter().map(|p| p.1).sum();
     let receivers = if picked_w > 0.0 {
-        pixels.len() as f64 * sum_w / picked_w
+        pixels as f64 * sum_w / picked_w
     } else {
         0.0
     };
@@ -208,19 +254,30 @@ pub fn sample_light(
 /// Samples every mask of a frame (`frame` numbers it for the random streams).
 pub fn sample_frame(
     reference: &Reference,
-    gbuffer: &GBuffer,
+    surfaces: &impl Surfaces,
     lights: &[Light],
     masks: &[Mask],
     n: usize,
     seed: u64,
     frame: u64,
 ) -> FrameSample {
-    let per_light: Vec<LightSample> = masks
+    let picks = frame_picks(lights, masks, n, seed, frame);
+    sample_picked(reference, surfaces, lights, masks, &picks)
+}
+
+/// [`sample_frame`] at picks made before ([`frame_picks`] of the same masks).
+pub fn sample_picked(
+    reference: &Reference,
+    surfaces: &impl Surfaces,
+    lights: &[Light],
+    masks: &[Mask],
+    picks: &[Picks],
+) -> FrameSample {
+    let per_light: Vec<LightSample> = picks
         .iter()
-        .filter(|m| m.light < lights.len())
-        .map(|m| {
-            let mut rng = stream(seed, frame, m.light);
-            sample_light(reference, gbuffer, &lights[m.light], m, n, &mut rng)
+        .filter_map(|p| {
+            let mask = masks.iter().find(|m| m.light == p.light)?;
+            Some(sample_light(reference, surfaces, &lights[p.light], mask, p))
         })
         .collect();
     let rays = per_light.iter().map(|l| l.samples).sum();

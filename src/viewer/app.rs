@@ -230,7 +230,13 @@ impl Running {
                 // Masks are drawn after the timed frame: the rest of the call is their cost.
                 let masks_ms = start.elapsed().as_secs_f64() * 1e3 - frame.frame_ms;
                 let mut sampling_ms = 0.0;
-                if live && let Some(s) = state.live_error.sample(&state.scene, &frame, &options) {
+                let sampled = live
+                    .then(|| {
+                        let l = &mut state.live_error;
+                        l.sample(&state.scene, &frame, &mut self.renderer, &options)
+                    })
+                    .flatten();
+                if let Some(s) = sampled {
                     self.renderer.record_errors(&s.per_light, &options);
                     sampling_ms = masks_ms.max(0.0) + state.live_error.trace_ms;
                 }

@@ -4,7 +4,7 @@
 //! worker thread; until it is ready the overlay says so.
 
 use crate::options::{Options, Technique};
-use crate::report::estimate::sample_masks;
+use crate::report::estimate::{gather_picks, sample_masks};
 use crate::scene::Scene;
 use crate::truth::Reference;
 use crate::truth::sampled::{FrameSample, Interval, Running};
@@ -31,7 +31,8 @@ pub struct LiveError {
     /// The technique each light ran with in the last sampled frame.
     last: BTreeMap<usize, Option<Technique>>,
     frames: u64,
-    /// Milliseconds the last frame's tracing took.
+    /// Milliseconds the last frame's sample took: the G-buffer read where it picks, and the
+    /// tracing.
     pub trace_ms: f64,
     /// The last frame's sample, all lights.
     pub last_frame: Option<FrameSample>,
@@ -103,16 +104,22 @@ impl LiveError {
         &mut self,
         scene: &Scene,
         frame: &crate::frame::Frame,
+        renderer: &mut crate::run::Renderer,
         options: &Options,
     ) -> Option<&FrameSample> {
         let reference = self.reference.as_ref()?;
+        let start = std::time::Instant::now();
+        // The G-buffer where the sample picks, when the frame left it on the GPU.
+        let gathered = gather_picks(renderer, scene, frame, options, self.frames).ok()?;
+        let gather_ms = start.elapsed().as_secs_f64() * 1e3;
         let text = serde_json::to_string(options).unwrap_or_default();
         if text != self.options {
             self.running.clear();
             self.options = text;
         }
-        let (s, trace_ms) = sample_masks(reference, scene, frame, options, self.frames).ok()?;
-        self.trace_ms = trace_ms;
+        let at = (frame, gathered.as_ref());
+        let (s, trace_ms) = sample_masks(reference, scene, at, options, self.frames).ok()?;
+        self.trace_ms = gather_ms + trace_ms;
         self.frames += 1;
         let techniques: BTreeMap<usize, Technique> = frame
             .steps

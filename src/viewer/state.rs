@@ -214,6 +214,9 @@ impl ViewerState {
         FrameRequest {
             masks: wants_error && self.walkthrough.is_none(),
             masks_drawn_again: false,
+            // The error view's job reads the G-buffer whole; the live estimate only where it
+            // picks.
+            gbuffer_kept: !wants_error,
             stop_after: self.walkthrough,
             stencil_of: (self.view == ViewMode::Stencil).then_some(self.selected_light),
             // The selected light's volumes: all lights' at once hide each other.

@@ -6,18 +6,41 @@ use super::{PassContext, draw_items};
 use crate::gl::program::Program;
 use glow::HasContext;
 
-pub fn draw(ctx: &PassContext, program: &Program) {
+/// The most lights whose reach one G-buffer pass records (a bit each of a 32-bit target).
+pub const REACH_LIGHTS: usize = 32;
+
+/// Draws the G-buffer, with bit k of its reach target set where light `reach_lights[k]` (at
+/// most [`REACH_LIGHTS`]) reaches the pixel's surface.
+pub fn draw(ctx: &PassContext, program: &Program, reach_lights: &[usize]) {
     let gl = ctx.gl;
-    // SAFETY: fixed-function state on the bound G-buffer framebuffer.
     DrawState::OPAQUE.apply(gl);
+    // SAFETY: clears of the bound G-buffer framebuffer's attachments (the reach target is an
+    // integer one, which glClear leaves undefined).
     unsafe {
-        gl.clear_color(0.0, 0.0, 0.0, 0.0);
-        gl.clear_depth(1.0);
-        gl.clear(glow::COLOR_BUFFER_BIT | glow::DEPTH_BUFFER_BIT);
+        gl.clear_buffer_f32_slice(glow::COLOR, 0, &[0.0; 4]);
+        gl.clear_buffer_f32_slice(glow::COLOR, 1, &[0.0; 4]);
+        gl.clear_buffer_u32_slice(glow::COLOR, 2, &[0; 4]);
+        gl.clear_buffer_f32_slice(glow::DEPTH, 0, &[1.0]);
     }
     program.bind(gl);
     program.set_mat4(gl, "u_view_proj", &ctx.plan.camera.view_proj);
     program.set_i32(gl, "u_texture", 0);
+    let reach_lights = &reach_lights[..reach_lights.len().min(REACH_LIGHTS)];
+    program.set_i32(gl, "u_reach_lights", reach_lights.len() as i32);
+    for (k, &l) in reach_lights.iter().enumerate() {
+        let light = &ctx.scene.lights[l];
+        let (dir, cos_cutoff, _) = super::lit::cone_of(light);
+        program.set_vec4(
+            gl,
+            &format!("u_reach_position_radius[{k}]"),
+            light.position.extend(light.radius),
+        );
+        program.set_vec4(
+            gl,
+            &format!("u_reach_direction_cutoff[{k}]"),
+            dir.extend(cos_cutoff),
+        );
+    }
     let items = ctx
         .gpu
         .draw_list(ctx.scene, crate::gl::upload::Merge::ByMaterial, |s| {

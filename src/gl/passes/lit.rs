@@ -90,7 +90,7 @@ fn bind_maps(ctx: &PassContext, program: &Program, lp: &LightPlan, shadow: &LitS
 }
 
 /// The light's camera, colour and cone.
-fn set_light(ctx: &PassContext, program: &Program, lp: &LightPlan) {
+pub fn set_light(ctx: &PassContext, program: &Program, lp: &LightPlan) {
     let gl = ctx.gl;
     let light = &ctx.scene.lights[lp.light];
     program.set_mat4(gl, "u_view_proj", &ctx.plan.camera.view_proj);
@@ -101,7 +101,17 @@ fn set_light(ctx: &PassContext, program: &Program, lp: &LightPlan) {
         "u_light_color",
         light.color * ctx.settings.lighting.intensity,
     );
-    let (dir, cos_cutoff, cos_inner) = match light.kind {
+    let (dir, cos_cutoff, cos_inner) = cone_of(light);
+    program.set_vec3(gl, "u_spot_dir", dir);
+    program.set_f32(gl, "u_cos_cutoff", cos_cutoff);
+    program.set_f32(gl, "u_cos_inner", cos_inner);
+    program.set_f32(gl, "u_radius", light.radius);
+}
+
+/// A light's cone as the shaders take it: direction, cosine of the cutoff (-1: omni) and of
+/// where the edge starts to soften.
+pub fn cone_of(light: &crate::scene::Light) -> (Vec3, f32, f32) {
+    match light.kind {
         LightKind::Spot {
             direction,
             cutoff_deg,
@@ -111,11 +121,7 @@ fn set_light(ctx: &PassContext, program: &Program, lp: &LightPlan) {
             (cutoff_deg * SPOT_INNER_FRACTION).to_radians().cos(),
         ),
         LightKind::Omni => (Vec3::Z, -1.0, -1.0),
-    };
-    program.set_vec3(gl, "u_spot_dir", dir);
-    program.set_f32(gl, "u_cos_cutoff", cos_cutoff);
-    program.set_f32(gl, "u_cos_inner", cos_inner);
-    program.set_f32(gl, "u_radius", light.radius);
+    }
 }
 
 /// The lit pass's polygon offset (the paper's, toward the camera, with a map) and no clip
@@ -470,4 +476,45 @@ pub fn draw_mask(
         draw_items(ctx, program, &items, |_| {});
     }
     finish(gl);
+}
+
+/// Adds (0, 1) to the bound decision layer (`gl::record`) wherever the G-buffer (`textures`:
+/// position, normal) shows a receiving surface the light reaches: the pixels its lit pass left
+/// undrawn there are the ones its stencil or alpha test shadowed. A full-screen triangle
+/// within the bound scissor.
+pub fn draw_reached(
+    ctx: &PassContext,
+    program: &Program,
+    lp: &LightPlan,
+    (position, normal): (glow::Texture, glow::Texture),
+    vao: glow::VertexArray,
+) {
+    let gl = ctx.gl;
+    DrawState {
+        color_write: true,
+        depth_write: false,
+        depth_test: None,
+        blend: Some((glow::ONE, glow::ONE)),
+        stencil_test: false,
+        polygon_offset: None,
+    }
+    .apply(gl);
+    program.bind(gl);
+    set_light(ctx, program, lp);
+    program.set_i32(gl, "u_position", 0);
+    program.set_i32(gl, "u_normal", 1);
+    // SAFETY: binds the G-buffer's textures to units 0 and 1 and draws a full-screen triangle
+    // from gl_VertexID.
+    unsafe {
+        gl.disable(glow::CULL_FACE);
+        gl.active_texture(glow::TEXTURE1);
+        gl.bind_texture(glow::TEXTURE_2D, Some(normal));
+        gl.active_texture(glow::TEXTURE0);
+        gl.bind_texture(glow::TEXTURE_2D, Some(position));
+        gl.bind_vertex_array(Some(vao));
+        gl.draw_arrays(glow::TRIANGLES, 0, 3);
+        gl.bind_vertex_array(None);
+        gl.disable(glow::BLEND);
+        gl.enable(glow::DEPTH_TEST);
+    }
 }

@@ -1,7 +1,6 @@
 //! After the timed frame, when asked: the G-buffer and each light's decision mask.
 
 use super::*;
-use crate::truth::recorded::reaches;
 impl<'a> FrameRun<'a> {
     /// The G-buffer and each light's decision mask, when the request asks for masks
     /// (untimed, after the frame).
@@ -16,12 +15,21 @@ impl<'a> FrameRun<'a> {
         };
         let hybrid_stats = std::mem::take(&mut self.hybrid_in_frame);
         gtarget_bind(gl, gtarget);
-        passes::gbuffer::draw(&self.ctx, &self.programs.gbuffer);
-        let gbuffer = read_gbuffer(gl, gtarget);
+        let mut dropping = self.dropping_lights();
+        dropping.truncate(passes::gbuffer::REACH_LIGHTS);
+        passes::gbuffer::draw(&self.ctx, &self.programs.gbuffer, &dropping);
+        self.mark_reached(gtarget);
+        let reach = match dropping.is_empty() {
+            true => Vec::new(),
+            false => gtarget.read_reach(gl),
+        };
+        // Kept on the GPU when asked, unless the legacy pipeline's masks read it.
+        let whole = !self.request.gbuffer_kept || self.fixed.is_some();
+        let gbuffer = whole.then(|| read_gbuffer(gl, gtarget));
         let mut masks = Vec::with_capacity(plan.lights.len() + plan.culled.len());
         let mut drawn = std::mem::take(&mut self.masks_in_frame);
         for (pi, lp) in plan.lights.iter().enumerate() {
-            if let Some(mask) = self.recorded_mask(lp, &gbuffer) {
+            if let Some(mask) = self.recorded_mask(lp, (&reach, &dropping)) {
                 masks.push(mask);
                 continue;
             }
@@ -42,7 +50,9 @@ impl<'a> FrameRun<'a> {
                 self.fixed_mask(ff, lp, &self.bindings(maps, pi));
                 set_scissor(gl, None);
                 let mut values = mtarget.read(gl);
-                keep_reached(&mut values, &gbuffer, &self.ctx.scene.lights[lp.light]);
+                if let Some(gbuffer) = &gbuffer {
+                    keep_reached(&mut values, gbuffer, &self.ctx.scene.lights[lp.light]);
+                }
                 masks.push(Mask {
                     light: lp.light,
                     width: mtarget.width,
@@ -72,7 +82,7 @@ impl<'a> FrameRun<'a> {
             });
         }
         masks.sort_by_key(|m| m.light);
-        (Some(gbuffer), masks, hybrid_stats)
+        (gbuffer, masks, hybrid_stats)
     }
 
     /// Whether light `lp`'s mask is drawn within the frame, right after the work it reads
@@ -266,7 +276,12 @@ fn clear_mask(gl: &glow::Context, scissor: Option<Scissor>) {
 
 pub(super) fn keep_reached(values: &mut [u8], gbuffer: &GBuffer, light: &crate::scene::Light) {
     for (i, v) in values.iter_mut().enumerate() {
-        if !reaches(light, gbuffer, i) {
+        let reached = gbuffer.is_receiver_surface(i) && {
+            let p = glam::Vec3::from_array(gbuffer.position[i]).as_dvec3();
+            let n = glam::Vec3::from_array(gbuffer.normal[i]).as_dvec3();
+            light.reaches(p, n)
+        };
+        if !reached {
             *v = MaskValue::NotReceiver as u8;
         }
     }

@@ -10,6 +10,7 @@ use super::depth_reduce::DepthReducer;
 use super::extrusion::{ExtrudedDraw, Extrusions};
 use super::fixed::{self, FixedFunction};
 use super::fragments::{FragmentBuffers, LightFragmentDraw};
+use super::gather::Gather;
 use super::id_tables::IdTables;
 use super::legacy::Legacy;
 use super::passes::lit::{LitShadow, Marks, ShadowBinding};
@@ -26,7 +27,7 @@ use super::upload::GpuScene;
 use super::volumes::{LightVolumes, VolumeBuffers};
 use crate::frame::{CacheStats, Syncs};
 use crate::frame::{Frame, HybridStats, Step, StepKind};
-use crate::images::{GBuffer, Mask, MaskValue, Rgba, StencilImage};
+use crate::images::{GBuffer, GBufferPicks, Mask, MaskValue, Rgba, StencilImage};
 use crate::options::{
     Compare, CompareResult, DepthBits, Filter, MapBuffer, Outside, StencilPasses, StencilWrap,
     Technique, TexgenSpace, VolumeShading,
@@ -103,6 +104,10 @@ pub struct FrameRequest {
     /// Draw every light's mask again rather than read what its lit pass recorded: the
     /// masks as they were made before the record, to check it against.
     pub masks_drawn_again: bool,
+    /// With masks: leave the G-buffer on the GPU (`Frame::gbuffer` is None) for
+    /// [`Drawer::gbuffer_at`] to read where a sampler picks, unless a mask needs it whole
+    /// (the legacy pipeline's).
+    pub gbuffer_kept: bool,
     /// Stop after this step (walkthrough): the frame then holds the steps so far and the
     /// buffer the step wrote as `step_image`.
     pub stop_after: Option<usize>,
@@ -191,6 +196,8 @@ pub struct Drawer {
     measure_targets: Option<(GBufferTarget, MaskTarget)>,
     /// The layers lit passes record their decisions into, when masks are asked for.
     record: Option<DecisionRecord>,
+    /// Reads the G-buffer at picked pixels (`gbuffer_at`).
+    gather: Option<Gather>,
     /// Core profile draws need a bound VAO even without attributes (full-screen triangles).
     empty_vao: glow::VertexArray,
     /// Created on the first frame that reduces its depth for the planner.
@@ -275,6 +282,7 @@ impl Drawer {
             fragments: FragmentBuffers::default(),
             measure_targets: None,
             record: None,
+            gather: None,
             empty_vao,
             depth_reducer: None,
             last_maps: Vec::new(),
@@ -552,6 +560,19 @@ impl Drawer {
         Ok(copy)
     }
 
+    /// The G-buffer of the latest frame asked for masks with `gbuffer_kept`, at `pixels`
+    /// (row-major, top row first, sorted, each once).
+    pub fn gbuffer_at(&mut self, pixels: Vec<u32>) -> Result<GBufferPicks, RenderError> {
+        let Some((gtarget, _)) = self.measure_targets.as_ref() else {
+            return Err(RenderError::Gl("no G-buffer kept to read".into()));
+        };
+        let gather =
+            Gather::holding(&self.gl, self.gather.take(), pixels.len()).map_err(RenderError::Gl)?;
+        let picks = gather.read(&self.gl, &self.programs.gather, gtarget, pixels);
+        self.gather = Some(gather);
+        Ok(picks)
+    }
+
     /// A record of as many layers as `lights` want (within its budget), the frame's size.
     fn ensure_record(&mut self, lights: usize) -> Result<(), RenderError> {
         let size = (self.target.width, self.target.height);
@@ -812,9 +833,9 @@ impl<'a> FrameRun<'a> {
             false => self.color_image(),
         };
         let (gbuffer, masks, hybrid) = self.measure(&maps);
-        let masks_recorded = match gbuffer {
-            Some(_) => self.recorded.len(),
-            None => 0,
+        let masks_recorded = match masks.is_empty() {
+            true => 0,
+            false => self.recorded.len(),
         };
         let plan = self.ctx.plan;
         Ok(Frame {
@@ -946,6 +967,9 @@ impl Drop for Drawer {
         }
         if let Some(r) = self.record.take() {
             r.delete(gl);
+        }
+        if let Some(g) = self.gather.take() {
+            g.delete(gl);
         }
         if let Some(r) = self.depth_reducer.take() {
             r.delete(gl);

@@ -130,6 +130,10 @@ pub(super) struct Programs {
     /// The subdivision's shadowed fragments into the stencil.
     pub(super) fragments: Program,
     pub(super) fill: Program,
+    /// A recording light's undrawn pixels it reaches, into its layer (`gl::record`).
+    pub(super) record_reach: Program,
+    /// The G-buffer at picked pixels (`gl::gather`).
+    pub(super) gather: Program,
     /// The depth's 4×4 block maxima for the planner.
     pub(super) depth_reduce: Program,
     /// A priority buffer's mip levels (`shadow_map.priority_mipmap`).
@@ -190,6 +194,20 @@ impl Programs {
                 "fill",
                 sources::FULLSCREEN_VERT,
                 Some(sources::FILL_FRAG),
+                &[],
+            )?,
+            gather: Program::new(
+                gl,
+                "gather",
+                sources::GATHER_VERT,
+                Some(sources::GATHER_FRAG),
+                &[],
+            )?,
+            record_reach: Program::new(
+                gl,
+                "record_reach",
+                sources::FULLSCREEN_VERT,
+                Some(sources::RECORD_REACH_FRAG),
                 &[],
             )?,
             depth_reduce: Program::new(
@@ -273,6 +291,8 @@ impl Programs {
             &self.volume.extruded,
             &self.fragments,
             &self.fill,
+            &self.record_reach,
+            &self.gather,
             &self.depth_reduce,
             &self.priority_mips,
             &self.debug_volume,

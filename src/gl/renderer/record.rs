@@ -2,13 +2,17 @@
 //! masks made from the record after the frame.
 
 use super::*;
-use crate::truth::recorded::{Rect, Undrawn, mask_from_record};
+use crate::gl::passes::gbuffer::REACH_LIGHTS;
+use crate::truth::recorded::{Rect, mask_from_record};
 
 /// A light whose lit passes record into a layer of the frame's record.
 pub(crate) struct RecordedLight {
     pub light: usize,
     pub layer: u32,
-    pub undrawn: Undrawn,
+    /// Its lit pass drops shadowed fragments before its shader (the stencil test): the pixels
+    /// it reaches but did not draw are marked shadowed after the frame. (The alpha test of
+    /// `shadow_map.result = alpha` keeps them while recording: `set_keep_shadowed`.)
+    pub drops_shadowed: bool,
 }
 
 impl FrameRun<'_> {
@@ -20,6 +24,7 @@ impl FrameRun<'_> {
         let Some(record) = self.record else {
             return;
         };
+        // The stencil test drops shadowed fragments before the shader runs.
         let stenciled = self.volumes_of(lp).is_some() || self.fragments_of(lp).is_some();
         let fill = self.fragments_of(lp).is_none()
             && self.volumes_of(lp).is_some()
@@ -31,16 +36,10 @@ impl FrameRun<'_> {
         if layer >= record.layers {
             return;
         }
-        let alpha_test =
-            lp.technique.uses_maps() && self.ctx.settings.shadow_map.result == CompareResult::Alpha;
-        let undrawn = match stenciled || alpha_test {
-            true => Undrawn::ShadowedWhereReached,
-            false => Undrawn::NotReceiver,
-        };
         self.recorded.push(RecordedLight {
             light: lp.light,
             layer,
-            undrawn,
+            drops_shadowed: stenciled,
         });
     }
 
@@ -60,6 +59,7 @@ impl FrameRun<'_> {
         };
         set_scissor(self.ctx.gl, lp.scissor);
         record.attach(self.ctx.gl, layer);
+        self.set_keep_shadowed(true);
         true
     }
 
@@ -67,22 +67,74 @@ impl FrameRun<'_> {
     pub(super) fn end_record(&self, began: bool) {
         if began {
             DecisionRecord::detach(self.ctx.gl);
+            self.set_keep_shadowed(false);
         }
     }
 
-    /// Light `lp`'s mask from its layer, or None when it did not record.
-    pub(super) fn recorded_mask(&self, lp: &LightPlan, gbuffer: &GBuffer) -> Option<Mask> {
+    /// Whether the lit programs' alpha test keeps rejected fragments (adding nothing, their
+    /// decision recorded) rather than leaving: set on every lit program, whose uniforms keep
+    /// it until set again, for a recording light's passes only.
+    fn set_keep_shadowed(&self, keep: bool) {
+        let gl = self.ctx.gl;
+        for p in self.programs.lit.values() {
+            p.bind(gl);
+            p.set_i32(gl, "u_keep_shadowed", keep as i32);
+        }
+    }
+
+    /// The recording lights that drop their shadowed fragments, in order: the G-buffer pass
+    /// finds the pixels the first [`REACH_LIGHTS`] reach (a bit each), `mark_reached` the
+    /// others'.
+    pub(super) fn dropping_lights(&self) -> Vec<usize> {
+        self.recorded
+            .iter()
+            .filter(|r| r.drops_shadowed)
+            .map(|r| r.light)
+            .collect()
+    }
+
+    /// After the frame, over the G-buffer `gtarget` holds: the pixels each light that drops
+    /// its shadowed fragments, beyond the G-buffer pass's reach bits, reaches but did not
+    /// draw, marked shadowed in its layer (a full-screen pass each).
+    pub(super) fn mark_reached(&self, gtarget: &GBufferTarget) {
+        let Some(record) = self.record else {
+            return;
+        };
+        let gl = self.ctx.gl;
+        let beyond = self.recorded.iter().filter(|r| r.drops_shadowed);
+        for r in beyond.skip(REACH_LIGHTS) {
+            let lp = self.ctx.plan.lights.iter().find(|lp| lp.light == r.light);
+            let Some(lp) = lp else {
+                continue;
+            };
+            record.bind_layer(gl, r.layer);
+            set_scissor(gl, lp.scissor);
+            passes::lit::draw_reached(
+                &self.ctx,
+                &self.programs.record_reach,
+                lp,
+                gtarget.textures(),
+                self.empty_vao,
+            );
+        }
+        set_scissor(gl, None);
+    }
+
+    /// Light `lp`'s mask from its layer, or None when it did not record; `reach`: the
+    /// G-buffer pass's reach bits and the lights they stand for, in bit order.
+    pub(super) fn recorded_mask(&self, lp: &LightPlan, reach: (&[u32], &[usize])) -> Option<Mask> {
         let record = self.record?;
         let r = self.recorded.iter().find(|r| r.light == lp.light)?;
         let values = record.read(self.ctx.gl, r.layer);
-        let rect = Rect::of_scissor(lp.scissor, record.width, record.height);
-        let light = &self.ctx.scene.lights[lp.light];
+        let scissor = lp.scissor.map(|s| [s.x, s.y, s.width, s.height]);
+        let rect = Rect::of_scissor(scissor, record.width, record.height);
+        let bit = reach.1.iter().position(|&l| l == lp.light);
         Some(mask_from_record(
-            (light, lp.light),
-            gbuffer,
+            lp.light,
+            (record.width, record.height),
             &values,
             rect,
-            r.undrawn,
+            bit.map(|b| (reach.0, b as u32)),
         ))
     }
 }

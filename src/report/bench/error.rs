@@ -9,7 +9,7 @@ use crate::options::Options;
 use crate::plan::PlanStats;
 use crate::plan::fallback::Fallback;
 use crate::plan::volume_draws::VolumeStats;
-use crate::report::estimate::{gbuffer_of, render_sampled, sample_masks};
+use crate::report::estimate::{GBufferRead, gbuffer_of, render_sampled, sample_masks};
 use crate::run::{FrameRequest, RenderError};
 use crate::scene::path::PathKey;
 use crate::truth::sampled::FrameSample;
@@ -17,8 +17,9 @@ use crate::truth::{Counts, ExactMasks, Reference};
 use std::collections::HashMap;
 use std::time::Instant;
 
-/// One sampled frame of a path: its index, the sample, milliseconds of masks and of tracing.
-pub(super) type PathSample = (usize, FrameSample, f64, f64);
+/// One sampled frame of a path: its index, the sample, milliseconds of masks and of tracing,
+/// and of the frame itself (whose lit passes recorded its decisions).
+pub(super) type PathSample = (usize, FrameSample, f64, f64, f64);
 
 /// A configuration's error, with its first frame's sample when one was asked for.
 pub(super) type Errored = (FrameError, Option<PathSample>);
@@ -164,9 +165,9 @@ impl<'a> Bench<'a> {
                 &camera,
                 options,
                 reference,
-                (i as u64, true),
+                (i as u64, true, GBufferRead::Picks),
             )?;
-            out.push((i, s.sample, s.masks_ms, s.trace_ms));
+            out.push((i, s.sample, s.masks_ms, s.trace_ms, s.frame.frame_ms));
         }
         Ok(out)
     }
@@ -199,8 +200,8 @@ impl<'a> Bench<'a> {
         let (c, masks_ms) = self.capture_timed(options)?;
         let sampled = if sample {
             let reference = self.view.exact.reference(&self.scene);
-            let (s, trace_ms) = sample_masks(reference, &self.scene, &c.frame, options, 0)?;
-            Some((0, s, masks_ms, trace_ms))
+            let (s, trace_ms) = sample_masks(reference, &self.scene, (&c.frame, None), options, 0)?;
+            Some((0, s, masks_ms, trace_ms, c.frame.frame_ms))
         } else {
             None
         };

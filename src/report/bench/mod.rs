@@ -18,7 +18,7 @@ use crate::report::store::RowStore;
 use crate::run::{FrameRequest, Prepared, RenderError, Renderer};
 use crate::scene::Scene;
 use crate::scene::path::PathKey;
-use crate::truth::sampled::{FrameSample, Interval};
+use crate::truth::sampled::Interval;
 use crate::truth::{Counts, Reference};
 use indicatif::ProgressBar;
 use serde::{Deserialize, Serialize};
@@ -314,17 +314,18 @@ pub struct SampledPath {
     pub trace_ms: f64,
     /// `masks_ms + trace_ms` over the configuration's median frame time.
     pub share_of_frame: f64,
+    /// Median milliseconds of the sampled frames themselves: beside the configuration's frame
+    /// time, what recording each light's decision in its lit pass (`gl::record`) adds.
+    #[serde(default)]
+    pub frame_ms: f64,
 }
 
 impl SampledPath {
-    fn new(
-        samples: u32,
-        frames: Vec<(usize, FrameSample, f64, f64)>,
-        frame_ms: f64,
-    ) -> SampledPath {
+    fn new(samples: u32, frames: Vec<error::PathSample>, frame_ms: f64) -> SampledPath {
         let mut errors: Vec<f64> = frames.iter().map(|f| f.1.total.value).collect();
         let mut masks: Vec<f64> = frames.iter().map(|f| f.2).collect();
         let mut trace: Vec<f64> = frames.iter().map(|f| f.3).collect();
+        let mut own: Vec<f64> = frames.iter().map(|f| f.4).collect();
         let (masks_ms, trace_ms) = (median(&mut masks), median(&mut trace));
         SampledPath {
             samples_per_light: samples,
@@ -332,7 +333,7 @@ impl SampledPath {
             median: median(&mut errors),
             frames: frames
                 .into_iter()
-                .map(|(i, f, _, _)| SampledFrame {
+                .map(|(i, f, ..)| SampledFrame {
                     frame: i,
                     error: f.total,
                     rays: f.rays,
@@ -345,6 +346,7 @@ impl SampledPath {
             } else {
                 0.0
             },
+            frame_ms: median(&mut own),
         }
     }
 }
@@ -505,6 +507,7 @@ struct Timed {
 const TIMED: FrameRequest = FrameRequest {
     masks: false,
     masks_drawn_again: false,
+    gbuffer_kept: false,
     stop_after: None,
     stencil_of: None,
     overlays: crate::gl::Overlays {
