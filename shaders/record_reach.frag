@@ -1,5 +1,5 @@
 // A recording light's pixels that its lit pass left undrawn though the light reaches them
-// (its stencil or its alpha test dropped them: shadowed), added over its layer (gl/record.rs)
+// (its stencil dropped them: shadowed), added over its layer (gl/record.rs)
 // as (0, 1); a pixel the pass lit stays lit. The reach is the lit pass's own test, on the
 // G-buffer's position and normal.
 uniform sampler2D u_position;

@@ -113,14 +113,12 @@ impl Gather {
             )
         };
         let (p, nk) = (read(glow::COLOR_ATTACHMENT0), read(glow::COLOR_ATTACHMENT1));
+        let (position, normal, kind) = GBufferTarget::fields(&p[..n], &nk[..n]);
         GBufferPicks {
-            position: p[..n].iter().map(|v| [v[0], v[1], v[2]]).collect(),
-            normal: nk[..n].iter().map(|v| [v[0], v[1], v[2]]).collect(),
-            kind: nk[..n]
-                .iter()
-                .map(|v| v[3].round().clamp(0.0, 2.0) as u8)
-                .collect(),
             pixels,
+            position,
+            normal,
+            kind,
         }
     }
 

@@ -7,7 +7,8 @@
 //! it calls it shadowed, under the lit pass's own additive blending: a pixel a light reaches
 //! twice (coplanar triangles without `lighting.light_once`) stays what it was, since only
 //! which channel is non-zero is read. A fragment the lit pass never runs (shadowed by the
-//! stencil, rejected by the alpha test of `result = alpha`, unreached) leaves (0, 0).
+//! stencil, unreached) leaves (0, 0); the alpha test of `result = alpha` keeps its rejected
+//! fragments while recording (`u_keep_shadowed`), so they record.
 
 use super::target::{check_complete, read_pixels};
 use glow::HasContext;

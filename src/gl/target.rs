@@ -444,6 +444,22 @@ impl GBufferTarget {
         )
     }
 
+    /// Position and normal texels as read back (`gbuffer.frag`'s outputs) made the
+    /// G-buffer's fields: positions, normals, and each pixel's kind from the normal's w.
+    pub fn fields(
+        position: &[[f32; 4]],
+        normal: &[[f32; 4]],
+    ) -> (Vec<[f32; 3]>, Vec<[f32; 3]>, Vec<u8>) {
+        (
+            position.iter().map(|p| [p[0], p[1], p[2]]).collect(),
+            normal.iter().map(|n| [n[0], n[1], n[2]]).collect(),
+            normal
+                .iter()
+                .map(|n| n[3].round().clamp(0.0, 2.0) as u8)
+                .collect(),
+        )
+    }
+
     /// The reach bits, top row first.
     pub fn read_reach(&self, gl: &glow::Context) -> Vec<u32> {
         read_pixels(

@@ -8,9 +8,7 @@ use crate::plan::auto::learning_frames;
 use crate::run::{FrameRequest, RenderError, Renderer};
 use crate::scene::{Camera, Scene};
 use crate::truth::Reference;
-use crate::truth::sampled::{
-    FrameSample, Picks, frame_picks, picked_pixels, sample_frame, sample_picked,
-};
+use crate::truth::sampled::{FrameSample, Picks, frame_picks, picked_pixels, sample_picked};
 use std::time::Instant;
 
 /// How many times `estimate.samples` the learning frames trace.
@@ -56,10 +54,8 @@ pub fn sample_masks(
     let sample = match gathered {
         Some(g) => sample_picked(reference, &g.gbuffer, lights, masks, &g.picks),
         None => {
-            let (n, seed) = (options.estimate.samples, options.estimate.seed);
-            let gbuffer = gbuffer_of(frame)?;
-            let (n, seed) = (n as usize, u64::from(seed));
-            sample_frame(reference, gbuffer, lights, masks, n, seed, index)
+            let picks = picks_of_frame(scene, frame, options, index);
+            sample_picked(reference, gbuffer_of(frame)?, lights, masks, &picks)
         }
     };
     Ok((sample, start.elapsed().as_secs_f64() * 1e3))
@@ -78,11 +74,16 @@ pub fn gather_picks(
     if frame.gbuffer.is_some() {
         return Ok(None);
     }
-    let n = options.estimate.samples as usize;
-    let seed = u64::from(options.estimate.seed);
-    let picks = frame_picks(&scene.lights, &frame.masks, n, seed, index);
+    let picks = picks_of_frame(scene, frame, options, index);
     let gbuffer = renderer.gbuffer_at(picked_pixels(&picks))?;
     Ok(Some(Gathered { picks, gbuffer }))
+}
+
+/// The frame's picks: `options.estimate.samples` per light, from the streams `index` numbers.
+fn picks_of_frame(scene: &Scene, frame: &Frame, options: &Options, index: u64) -> Vec<Picks> {
+    let n = options.estimate.samples as usize;
+    let seed = u64::from(options.estimate.seed);
+    frame_picks(&scene.lights, &frame.masks, n, seed, index)
 }
 
 /// How much of the G-buffer a sampled frame reads back.

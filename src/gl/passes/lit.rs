@@ -480,7 +480,7 @@ pub fn draw_mask(
 
 /// Adds (0, 1) to the bound decision layer (`gl::record`) wherever the G-buffer (`textures`:
 /// position, normal) shows a receiving surface the light reaches: the pixels its lit pass left
-/// undrawn there are the ones its stencil or alpha test shadowed. A full-screen triangle
+/// undrawn there are the ones its stencil shadowed. A full-screen triangle
 /// within the bound scissor.
 pub fn draw_reached(
     ctx: &PassContext,

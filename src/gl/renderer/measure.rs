@@ -15,8 +15,7 @@ impl<'a> FrameRun<'a> {
         };
         let hybrid_stats = std::mem::take(&mut self.hybrid_in_frame);
         gtarget_bind(gl, gtarget);
-        let mut dropping = self.dropping_lights();
-        dropping.truncate(passes::gbuffer::REACH_LIGHTS);
+        let dropping = self.dropping_lights();
         passes::gbuffer::draw(&self.ctx, &self.programs.gbuffer, &dropping);
         self.mark_reached(gtarget);
         let reach = match dropping.is_empty() {
@@ -322,16 +321,12 @@ pub(super) fn gtarget_bind(gl: &glow::Context, t: &GBufferTarget) {
 }
 
 pub(super) fn read_gbuffer(gl: &glow::Context, t: &GBufferTarget) -> GBuffer {
-    let position = t.read(gl, 0);
-    let normal = t.read(gl, 1);
+    let (position, normal, kind) = GBufferTarget::fields(&t.read(gl, 0), &t.read(gl, 1));
     GBuffer {
         width: t.width,
         height: t.height,
-        kind: normal
-            .iter()
-            .map(|n| n[3].round().clamp(0.0, 2.0) as u8)
-            .collect(),
-        position: position.iter().map(|p| [p[0], p[1], p[2]]).collect(),
-        normal: normal.iter().map(|n| [n[0], n[1], n[2]]).collect(),
+        kind,
+        position,
+        normal,
     }
 }

@@ -25,10 +25,13 @@ impl FrameRun<'_> {
             return;
         };
         // The stencil test drops shadowed fragments before the shader runs.
-        let stenciled = self.volumes_of(lp).is_some() || self.fragments_of(lp).is_some();
-        let fill = self.fragments_of(lp).is_none()
-            && self.volumes_of(lp).is_some()
-            && self.ctx.settings.shadow_volume.shading == VolumeShading::Fill;
+        let (volumes, fragments) = (
+            self.volumes_of(lp).is_some(),
+            self.fragments_of(lp).is_some(),
+        );
+        let stenciled = volumes || fragments;
+        let fill =
+            volumes && !fragments && self.ctx.settings.shadow_volume.shading == VolumeShading::Fill;
         let layer = self.recorded.len() as u32;
         if self.fixed.is_some() || lp.technique == Technique::Hybrid || fill {
             return;
@@ -82,14 +85,15 @@ impl FrameRun<'_> {
         }
     }
 
-    /// The recording lights that drop their shadowed fragments, in order: the G-buffer pass
-    /// finds the pixels the first [`REACH_LIGHTS`] reach (a bit each), `mark_reached` the
-    /// others'.
+    /// The first [`REACH_LIGHTS`] recording lights that drop their shadowed fragments, in
+    /// order: bit k of the G-buffer pass's reach target stands for the k-th (`mark_reached`
+    /// finds the others').
     pub(super) fn dropping_lights(&self) -> Vec<usize> {
         self.recorded
             .iter()
             .filter(|r| r.drops_shadowed)
             .map(|r| r.light)
+            .take(REACH_LIGHTS)
             .collect()
     }
 
