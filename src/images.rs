@@ -118,7 +118,7 @@ impl Mask {
     }
 }
 
-/// What the camera sees at each pixel, read back from a G-buffer pass (row-major, top row first).
+/// What the camera sees at each pixel, read back from the G-buffer (row-major, top row first).
 #[derive(Debug, Clone, PartialEq)]
 pub struct GBuffer {
     pub width: u32,

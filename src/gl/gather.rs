@@ -4,7 +4,7 @@
 //! RGBA32F images) cost it more than the frame's masks and its rays together.
 
 use super::program::Program;
-use super::target::{GBufferTarget, read_pixels_bottom_up};
+use super::target::{GBUFFER_OUTPUTS, GBufferTarget, read_pixels_bottom_up};
 use super::upload::bytes_of;
 use crate::images::GBufferPicks;
 use glow::HasContext;
@@ -112,7 +112,7 @@ impl Gather {
                 1,
             )
         };
-        let (p, nk) = (read(glow::COLOR_ATTACHMENT0), read(glow::COLOR_ATTACHMENT1));
+        let (p, nk) = (read(GBUFFER_OUTPUTS[0]), read(GBUFFER_OUTPUTS[1]));
         let (position, normal, kind) = GBufferTarget::fields(&p[..n], &nk[..n]);
         GBufferPicks {
             pixels,

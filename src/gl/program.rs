@@ -33,7 +33,6 @@ pub mod sources {
     pub const WORLD_VERT: &str = include_str!("../../shaders/world.vert");
     pub const UNLIT_FRAG: &str = include_str!("../../shaders/unlit.frag");
     pub const LIT_FRAG: &str = include_str!("../../shaders/lit.frag");
-    pub const GBUFFER_FRAG: &str = include_str!("../../shaders/gbuffer.frag");
     pub const SHADOW: &str = include_str!("../../shaders/shadow.glsl");
     pub const DEPTH_VERT: &str = include_str!("../../shaders/depth.vert");
     pub const DEPTH_FRAG: &str = include_str!("../../shaders/depth.frag");

@@ -364,6 +364,15 @@ pub(crate) fn check_complete(gl: &glow::Context, what: &str) -> Result<(), Strin
 
 /// G-buffer for the exact reference: world position and normal as 32-bit floats, which of
 /// the recording lights reach each pixel (a bit each), own depth.
+/// Where the G-buffer's position, normal and reach bits are attached, in its own framebuffer
+/// and in the frame's during its base pass: outputs 1–3 of `unlit.frag` (and `gather.frag`),
+/// as ES wants output k at attachment k, with 0 the frame's colour.
+pub const GBUFFER_OUTPUTS: [u32; 3] = [
+    glow::COLOR_ATTACHMENT1,
+    glow::COLOR_ATTACHMENT2,
+    glow::COLOR_ATTACHMENT3,
+];
+
 pub struct GBufferTarget {
     pub fbo: glow::Framebuffer,
     position: glow::Texture,
@@ -398,22 +407,13 @@ impl GBufferTarget {
         unsafe {
             let fbo = gl.create_framebuffer()?;
             gl.bind_framebuffer(glow::FRAMEBUFFER, Some(fbo));
-            let colours = [
-                (glow::COLOR_ATTACHMENT0, position),
-                (glow::COLOR_ATTACHMENT1, normal),
-                (glow::COLOR_ATTACHMENT2, reach),
-            ];
-            for (attachment, tex) in colours.into_iter().chain([(glow::DEPTH_ATTACHMENT, depth)]) {
-                gl.framebuffer_texture_2d(
-                    glow::FRAMEBUFFER,
-                    attachment,
-                    glow::TEXTURE_2D,
-                    Some(tex),
-                    0,
-                );
-            }
-            gl.draw_buffers(&colours.map(|c| c.0));
-            let ok = check_complete(gl, "G-buffer");
+            gl.framebuffer_texture_2d(
+                glow::FRAMEBUFFER,
+                glow::DEPTH_ATTACHMENT,
+                glow::TEXTURE_2D,
+                Some(depth),
+                0,
+            );
             let t = GBufferTarget {
                 fbo,
                 position,
@@ -423,6 +423,15 @@ impl GBufferTarget {
                 width,
                 height,
             };
+            t.attach_to_bound(gl);
+            // Output 0 (the frame's colour, in the unlit pass) goes nowhere here.
+            gl.draw_buffers(&[
+                glow::NONE,
+                GBUFFER_OUTPUTS[0],
+                GBUFFER_OUTPUTS[1],
+                GBUFFER_OUTPUTS[2],
+            ]);
+            let ok = check_complete(gl, "G-buffer");
             gl.bind_framebuffer(glow::FRAMEBUFFER, None);
             if let Err(e) = ok {
                 t.delete(gl);
@@ -432,19 +441,62 @@ impl GBufferTarget {
         }
     }
 
-    /// Reads one RGBA32F attachment, top row first.
+    /// Attaches the position, normal and reach textures to the bound framebuffer at
+    /// [`GBUFFER_OUTPUTS`] (the frame's, for its base pass to write them too: `unlit.frag`
+    /// with `GBUFFER`), draw buffers left as they are.
+    pub fn attach_to_bound(&self, gl: &glow::Context) {
+        for (attachment, tex) in
+            GBUFFER_OUTPUTS
+                .into_iter()
+                .zip([self.position, self.normal, self.reach])
+        {
+            // SAFETY: our own textures, on the bound framebuffer.
+            unsafe {
+                gl.framebuffer_texture_2d(
+                    glow::FRAMEBUFFER,
+                    attachment,
+                    glow::TEXTURE_2D,
+                    Some(tex),
+                    0,
+                );
+            }
+        }
+    }
+
+    /// The bound frame framebuffer writing the G-buffer as well as its colour (after
+    /// `attach_to_bound`).
+    pub fn draw_into_bound(gl: &glow::Context) {
+        let mut buffers = vec![glow::COLOR_ATTACHMENT0];
+        buffers.extend(GBUFFER_OUTPUTS);
+        // SAFETY: draw buffers of the bound framebuffer, attached by `attach_to_bound`.
+        unsafe { gl.draw_buffers(&buffers) };
+    }
+
+    /// The bound frame framebuffer back to its one colour output, the G-buffer's textures
+    /// detached.
+    pub fn detach_from_bound(gl: &glow::Context) {
+        // SAFETY: the bound framebuffer's own attachments.
+        unsafe {
+            gl.draw_buffers(&[glow::COLOR_ATTACHMENT0]);
+            for attachment in GBUFFER_OUTPUTS {
+                gl.framebuffer_texture_2d(glow::FRAMEBUFFER, attachment, glow::TEXTURE_2D, None, 0);
+            }
+        }
+    }
+
+    /// Reads the position (0) or normal (1) attachment, top row first.
     pub fn read(&self, gl: &glow::Context, attachment: usize) -> Vec<[f32; 4]> {
         read_pixels(
             gl,
             Some(self.fbo),
-            Some(glow::COLOR_ATTACHMENT0 + attachment as u32),
+            Some(GBUFFER_OUTPUTS[attachment]),
             (self.width, self.height),
             (glow::RGBA, glow::FLOAT),
             1,
         )
     }
 
-    /// Position and normal texels as read back (`gbuffer.frag`'s outputs) made the
+    /// Position and normal texels as read back (`unlit.frag`'s G-buffer outputs) made the
     /// G-buffer's fields: positions, normals, and each pixel's kind from the normal's w.
     pub fn fields(
         position: &[[f32; 4]],
@@ -465,7 +517,7 @@ impl GBufferTarget {
         read_pixels(
             gl,
             Some(self.fbo),
-            Some(glow::COLOR_ATTACHMENT2),
+            Some(GBUFFER_OUTPUTS[2]),
             (self.width, self.height),
             (glow::RED_INTEGER, glow::UNSIGNED_INT),
             1,

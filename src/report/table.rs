@@ -144,7 +144,10 @@ pub fn bench_table(rows: &[BenchRow]) -> Table {
             "path error % (sampled median, max)".to_string(),
             Align::Right,
         ));
-        header.push(("sampling ms (masks + rays)".to_string(), Align::Right));
+        header.push((
+            "sampling ms (frame + masks + rays)".to_string(),
+            Align::Right,
+        ));
     }
     header.extend(stages.iter().map(|s| (format!("{s} ms"), Align::Right)));
     let mut t = Table {
@@ -185,7 +188,10 @@ pub fn bench_table(rows: &[BenchRow]) -> Table {
             match &r.sampled {
                 Some(p) => {
                     row.push(format!("{:.3}, {:.3}", 100.0 * p.median, 100.0 * p.max));
-                    row.push(format!("{:.1} + {:.1}", p.masks_ms, p.trace_ms));
+                    row.push(format!(
+                        "{:.1} + {:.1} + {:.1}",
+                        p.frame_extra_ms, p.masks_ms, p.trace_ms
+                    ));
                 }
                 None => row.extend(["–".to_string(), "–".to_string()]),
             }

@@ -229,7 +229,7 @@ impl Running {
             Ok(frame) => {
                 // Masks are drawn after the timed frame: the rest of the call is their cost.
                 let masks_ms = start.elapsed().as_secs_f64() * 1e3 - frame.frame_ms;
-                let mut sampling_ms = 0.0;
+                let mut sampling_ms = None;
                 let sampled = live
                     .then(|| {
                         let l = &mut state.live_error;
@@ -238,7 +238,7 @@ impl Running {
                     .flatten();
                 if let Some(s) = sampled {
                     self.renderer.record_errors(&s.per_light, &options);
-                    sampling_ms = masks_ms.max(0.0) + state.live_error.trace_ms;
+                    sampling_ms = Some(masks_ms.max(0.0) + state.live_error.trace_ms);
                 }
                 state.live_error.spend(frame.frame_ms, sampling_ms);
                 if request.masks && state.view == ViewMode::Error && state.error_job.is_none() {

@@ -41,6 +41,10 @@ pub struct LiveError {
     /// Milliseconds of frames and of sampling (masks and tracing) since it was turned on.
     frame_ms: f64,
     sampling_ms: f64,
+    /// A running mean of the frames drawn without sampling, against which a sampled frame's
+    /// own excess (its base pass writing the G-buffer, its lights recording) counts as
+    /// sampling.
+    plain_frame_ms: Option<f64>,
 }
 
 impl LiveError {
@@ -64,10 +68,20 @@ impl LiveError {
         self.reference.is_some() && self.sampling_ms <= budget * self.frame_ms
     }
 
-    /// Counts a frame's time and what sampling it cost (0 when it was not sampled).
-    pub fn spend(&mut self, frame_ms: f64, sampling_ms: f64) {
-        self.frame_ms += frame_ms;
-        self.sampling_ms += sampling_ms;
+    /// Counts a frame's time and, when it was sampled, what sampling cost after it: its
+    /// excess over the frames drawn without sampling counts as sampling too.
+    pub fn spend(&mut self, frame_ms: f64, sampling_ms: Option<f64>) {
+        let Some(sampling_ms) = sampling_ms else {
+            let mean = self
+                .plain_frame_ms
+                .map_or(frame_ms, |m| 0.9 * m + 0.1 * frame_ms);
+            self.plain_frame_ms = Some(mean);
+            self.frame_ms += frame_ms;
+            return;
+        };
+        let plain = self.plain_frame_ms.unwrap_or(frame_ms).min(frame_ms);
+        self.frame_ms += plain;
+        self.sampling_ms += sampling_ms + (frame_ms - plain);
     }
 
     /// The share of frame time spent sampling since it was turned on.
@@ -155,5 +169,31 @@ impl LiveError {
                 ))
             })
             .collect()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::LiveError;
+
+    #[test]
+    fn a_sampled_frames_excess_over_the_plain_frames_counts_as_sampling() {
+        let mut live = LiveError::default();
+        live.spend(20.0, None);
+        live.spend(20.0, None);
+        // 6 ms more than a plain frame (the G-buffer, the record), then 2 ms of masks and rays.
+        live.spend(26.0, Some(2.0));
+        assert!(
+            (live.share() - 8.0 / 60.0).abs() < 1e-12,
+            "{}",
+            live.share()
+        );
+        // Faster than the plain frames: nothing of the frame counts as sampling.
+        live.spend(15.0, Some(1.0));
+        assert!(
+            (live.share() - 9.0 / 75.0).abs() < 1e-12,
+            "{}",
+            live.share()
+        );
     }
 }

@@ -7,18 +7,26 @@ use crate::scene::{BakedLight, SurfaceOwner};
 use glam::Vec3;
 use glow::HasContext;
 
-pub fn draw(ctx: &PassContext, program: &Program) {
+/// Draws the unlit world; with `gbuffer` (the reach lights), `program` is the G-buffer
+/// variant and the bound framebuffer's draw buffers 1–3 take the G-buffer (`gbuffer.rs`).
+pub fn draw(ctx: &PassContext, program: &Program, gbuffer: Option<&[usize]>) {
     let gl = ctx.gl;
     // SAFETY: fixed-function state on the bound framebuffer.
     DrawState::OPAQUE.apply(gl);
     unsafe {
         gl.stencil_mask(0xff);
-        gl.clear_color(0.0, 0.0, 0.0, 1.0);
         gl.clear_depth(1.0);
         gl.clear_stencil(0);
-        gl.clear(glow::COLOR_BUFFER_BIT | glow::DEPTH_BUFFER_BIT | glow::STENCIL_BUFFER_BIT);
+        gl.clear(glow::DEPTH_BUFFER_BIT | glow::STENCIL_BUFFER_BIT);
+        // Draw buffer 0 alone: glClear would clear the G-buffer's too, its integer one
+        // undefined.
+        gl.clear_buffer_f32_slice(glow::COLOR, 0, &[0.0, 0.0, 0.0, 1.0]);
     }
     program.bind(gl);
+    if let Some(reach_lights) = gbuffer {
+        super::gbuffer::clear(gl);
+        super::gbuffer::set_reach(ctx, program, reach_lights);
+    }
     program.set_mat4(gl, "u_view_proj", &ctx.plan.camera.view_proj);
     program.set_i32(gl, "u_texture", 0);
     program.set_i32(gl, "u_lightmap", 1);
@@ -39,6 +47,10 @@ pub fn draw(ctx: &PassContext, program: &Program) {
             SurfaceOwner::Model(_) => lighting.model_ambient,
         };
         program.set_vec3(gl, "u_ambient", Vec3::splat(level));
+        if gbuffer.is_some() {
+            let receives = ctx.scene.materials[item.material].receives_light;
+            program.set_i32(gl, "u_receives", receives as i32);
+        }
         let lightmap = item
             .lightmap
             .and_then(|l| ctx.gpu.images().lightmaps.get(l).copied());

@@ -1,30 +1,30 @@
-//! The G-buffer pass: world position and normal of the visible surface at every pixel, for the
-//! exact reference. Run only when masks are requested, so it never counts in frame timings.
+//! The G-buffer, for the exact reference: world position and normal of the visible surface at
+//! every pixel, and which stenciled lights reach it. Written by the base pass itself in frames
+//! asked for masks (`unlit.frag` with `GBUFFER`, its outputs 1–3 attached to the frame), so the
+//! surfaces are the frame's own and no second pass draws the world again.
 
-use super::state::DrawState;
-use super::{PassContext, draw_items};
+use super::PassContext;
 use crate::gl::program::Program;
 use glow::HasContext;
 
-/// The most lights whose reach one G-buffer pass records (a bit each of a 32-bit target).
+/// The most lights whose reach one G-buffer records (a bit each of a 32-bit target).
 pub const REACH_LIGHTS: usize = 32;
 
-/// Draws the G-buffer, with bit k of its reach target set where light `reach_lights[k]` (at
-/// most [`REACH_LIGHTS`]) reaches the pixel's surface.
-pub fn draw(ctx: &PassContext, program: &Program, reach_lights: &[usize]) {
-    let gl = ctx.gl;
-    DrawState::OPAQUE.apply(gl);
-    // SAFETY: clears of the bound G-buffer framebuffer's attachments (the reach target is an
+/// Clears the G-buffer's outputs (draw buffers 1–3) of the bound framebuffer: no surface.
+pub fn clear(gl: &glow::Context) {
+    // SAFETY: clears of the bound framebuffer's G-buffer draw buffers (the reach target is an
     // integer one, which glClear leaves undefined).
     unsafe {
-        gl.clear_buffer_f32_slice(glow::COLOR, 0, &[0.0; 4]);
         gl.clear_buffer_f32_slice(glow::COLOR, 1, &[0.0; 4]);
-        gl.clear_buffer_u32_slice(glow::COLOR, 2, &[0; 4]);
-        gl.clear_buffer_f32_slice(glow::DEPTH, 0, &[1.0]);
+        gl.clear_buffer_f32_slice(glow::COLOR, 2, &[0.0; 4]);
+        gl.clear_buffer_u32_slice(glow::COLOR, 3, &[0; 4]);
     }
-    program.bind(gl);
-    program.set_mat4(gl, "u_view_proj", &ctx.plan.camera.view_proj);
-    program.set_i32(gl, "u_texture", 0);
+}
+
+/// Sets `program`'s reach lights: bit k of the reach target is set where light
+/// `reach_lights[k]` (at most [`REACH_LIGHTS`]) reaches the pixel's surface.
+pub fn set_reach(ctx: &PassContext, program: &Program, reach_lights: &[usize]) {
+    let gl = ctx.gl;
     let reach_lights = &reach_lights[..reach_lights.len().min(REACH_LIGHTS)];
     program.set_i32(gl, "u_reach_lights", reach_lights.len() as i32);
     for (k, &l) in reach_lights.iter().enumerate() {
@@ -41,13 +41,4 @@ pub fn draw(ctx: &PassContext, program: &Program, reach_lights: &[usize]) {
             dir.extend(cos_cutoff),
         );
     }
-    let items = ctx
-        .gpu
-        .draw_list(ctx.scene, crate::gl::upload::Merge::ByMaterial, |s| {
-            ctx.plan.visible[s]
-        });
-    draw_items(ctx, program, &items, |item| {
-        let receives = ctx.scene.materials[item.material].receives_light;
-        program.set_i32(gl, "u_receives", receives as i32);
-    });
 }

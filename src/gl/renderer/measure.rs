@@ -1,4 +1,5 @@
-//! After the timed frame, when asked: the G-buffer and each light's decision mask.
+//! After the timed frame, when asked: the G-buffer (drawn by the base pass) and each light's
+//! decision mask read back.
 
 use super::*;
 impl<'a> FrameRun<'a> {
@@ -14,11 +15,19 @@ impl<'a> FrameRun<'a> {
             return (None, Vec::new(), Vec::new());
         };
         let hybrid_stats = std::mem::take(&mut self.hybrid_in_frame);
-        gtarget_bind(gl, gtarget);
-        let dropping = self.dropping_lights();
-        passes::gbuffer::draw(&self.ctx, &self.programs.gbuffer, &dropping);
-        self.mark_reached(gtarget);
-        let reach = match dropping.is_empty() {
+        // The base pass wrote the G-buffer, unless the legacy pipeline drew it: then a pass
+        // of its own, without reach bits (that pipeline records nothing).
+        let reach_lights = match self.reach_lights.take() {
+            Some(lights) => lights,
+            None => {
+                gtarget_bind(gl, gtarget);
+                let program = &self.programs.unlit_gbuffer;
+                passes::base::draw(&self.ctx, program, Some(&[]));
+                Vec::new()
+            }
+        };
+        self.mark_reached(gtarget, &reach_lights);
+        let reach = match reach_lights.is_empty() {
             true => Vec::new(),
             false => gtarget.read_reach(gl),
         };
@@ -28,7 +37,7 @@ impl<'a> FrameRun<'a> {
         let mut masks = Vec::with_capacity(plan.lights.len() + plan.culled.len());
         let mut drawn = std::mem::take(&mut self.masks_in_frame);
         for (pi, lp) in plan.lights.iter().enumerate() {
-            if let Some(mask) = self.recorded_mask(lp, (&reach, &dropping)) {
+            if let Some(mask) = self.recorded_mask(lp, (&reach, &reach_lights)) {
                 masks.push(mask);
                 continue;
             }

@@ -2,7 +2,8 @@
 //! GPU copy, the framebuffer and the shadow maps. The order of the stages, and the planner the
 //! stages between them consult, are the frame's run's (the `run` module): this layer decides
 //! nothing, it draws what the plan and the resolved settings say. Masks and the G-buffer, when
-//! asked for, are drawn after the timed frame.
+//! asked for, come from the frame itself (the base pass writes the G-buffer, the lit passes
+//! record their decisions) and are read after it, untimed.
 
 use super::caps::{self, Caps};
 use super::debug;
@@ -95,7 +96,8 @@ pub enum RenderError {
 /// What a frame should produce besides its image and timings.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
 pub struct FrameRequest {
-    /// The G-buffer and each light's decision mask, untimed: a light's lit pass records its
+    /// The G-buffer and each light's decision mask, read untimed after the frame (whose base
+    /// pass writes the G-buffer, a little dearer for it): a light's lit pass records its
     /// decisions as it shades (`gl::record`), read back after the frame; a light it cannot
     /// record (hybrid, the fill shading, the legacy pipeline, beyond the record's budget)
     /// gets its mask drawn again, right after the work it reads (its counted stencil, maps
@@ -475,6 +477,7 @@ impl Drawer {
                 .as_ref()
                 .filter(|_| request.masks && !request.masks_drawn_again),
             recorded: Vec::new(),
+            reach_lights: None,
             timer: &mut self.timer,
             shadow_maps: &mut self.shadow_maps,
             id_tables: &mut self.id_tables,
@@ -755,6 +758,9 @@ pub(crate) struct FrameRun<'a> {
     record: Option<&'a DecisionRecord>,
     /// The lights recorded so far, each with its layer.
     recorded: Vec<RecordedLight>,
+    /// The lights of the G-buffer's reach bits, in bit order, once a pass wrote it (the base
+    /// pass, in a frame asked for masks).
+    reach_lights: Option<Vec<usize>>,
     timer: &'a mut PassTimer,
     shadow_maps: &'a mut ShadowMaps,
     id_tables: &'a mut IdTables,

@@ -122,7 +122,9 @@ pub const FILL_SHADE: f32 = 224.0 / 255.0;
 
 pub(super) struct Programs {
     pub(super) unlit: Program,
-    pub(super) gbuffer: Program,
+    /// The unlit pass writing the G-buffer too (`unlit.frag` with `GBUFFER`), for frames
+    /// asked for masks.
+    pub(super) unlit_gbuffer: Program,
     pub(super) depth: Program,
     /// The depth pass storing another matrix's depth than it draws with (trapezoidal maps).
     pub(super) depth_warp: Program,
@@ -148,10 +150,18 @@ pub(super) struct Programs {
 
 impl Programs {
     pub(super) fn new(gl: &glow::Context) -> Result<Programs, ProgramError> {
-        let world = |name, frag| Program::new(gl, name, sources::WORLD_VERT, Some(frag), &[]);
+        let unlit = |name, defines| {
+            Program::new(
+                gl,
+                name,
+                sources::WORLD_VERT,
+                Some(sources::UNLIT_FRAG),
+                defines,
+            )
+        };
         Ok(Programs {
-            unlit: world("unlit", sources::UNLIT_FRAG)?,
-            gbuffer: world("gbuffer", sources::GBUFFER_FRAG)?,
+            unlit: unlit("unlit", &[])?,
+            unlit_gbuffer: unlit("unlit[GBUFFER]", &["GBUFFER"])?,
             depth: Program::new(
                 gl,
                 "depth",
@@ -284,7 +294,7 @@ impl Programs {
     pub(super) fn delete(&mut self, gl: &glow::Context) {
         for p in [
             &self.unlit,
-            &self.gbuffer,
+            &self.unlit_gbuffer,
             &self.depth,
             &self.depth_warp,
             &self.volume.built,

@@ -15,7 +15,7 @@ pub(crate) struct RecordedLight {
     pub drops_shadowed: bool,
 }
 
-impl FrameRun<'_> {
+impl<'a> FrameRun<'a> {
     /// Gives light `lp` the next layer when the frame records and the light's lit pass says
     /// all its mask would: not a hybrid light (its mask brings the stats of its volumes' own
     /// counting), not the fill shading (whose lit pass lights shadowed pixels too, darkened
@@ -85,28 +85,49 @@ impl FrameRun<'_> {
         }
     }
 
-    /// The first [`REACH_LIGHTS`] recording lights that drop their shadowed fragments, in
-    /// order: bit k of the G-buffer pass's reach target stands for the k-th (`mark_reached`
-    /// finds the others').
-    pub(super) fn dropping_lights(&self) -> Vec<usize> {
-        self.recorded
+    /// The G-buffer, when this frame writes one (asked for masks).
+    pub(super) fn gbuffer_target(&self) -> Option<&'a GBufferTarget> {
+        self.measure_targets
+            .filter(|_| self.request.masks)
+            .map(|(g, _)| g)
+    }
+
+    /// The lights given a reach bit when the base pass writes the G-buffer, before any light
+    /// records: the first [`REACH_LIGHTS`] planned lights whose lit pass may drop shadowed
+    /// fragments by the stencil test (volumes or subdivision; not hybrid lights or the fill
+    /// shading, which do not record), none when the frame does not record.
+    pub(super) fn reach_candidates(&self) -> Vec<usize> {
+        if self.record.is_none() {
+            return Vec::new();
+        }
+        let fill = self.ctx.settings.shadow_volume.shading == VolumeShading::Fill;
+        self.ctx
+            .plan
+            .lights
             .iter()
-            .filter(|r| r.drops_shadowed)
-            .map(|r| r.light)
+            .filter(|lp| match lp.technique {
+                Technique::Hybrid => false,
+                Technique::Subdivision => true,
+                _ => lp.counts_volumes() && !fill,
+            })
+            .map(|lp| lp.light)
             .take(REACH_LIGHTS)
             .collect()
     }
 
-    /// After the frame, over the G-buffer `gtarget` holds: the pixels each light that drops
-    /// its shadowed fragments, beyond the G-buffer pass's reach bits, reaches but did not
+    /// After the frame, over the G-buffer `gtarget` holds: the pixels each recorded light that
+    /// drops its shadowed fragments, without a reach bit (`reach_lights`), reaches but did not
     /// draw, marked shadowed in its layer (a full-screen pass each).
-    pub(super) fn mark_reached(&self, gtarget: &GBufferTarget) {
+    pub(super) fn mark_reached(&self, gtarget: &GBufferTarget, reach_lights: &[usize]) {
         let Some(record) = self.record else {
             return;
         };
         let gl = self.ctx.gl;
-        let beyond = self.recorded.iter().filter(|r| r.drops_shadowed);
-        for r in beyond.skip(REACH_LIGHTS) {
+        let beyond = self
+            .recorded
+            .iter()
+            .filter(|r| r.drops_shadowed && !reach_lights.contains(&r.light));
+        for r in beyond {
             let lp = self.ctx.plan.lights.iter().find(|lp| lp.light == r.light);
             let Some(lp) = lp else {
                 continue;
@@ -125,14 +146,19 @@ impl FrameRun<'_> {
     }
 
     /// Light `lp`'s mask from its layer, or None when it did not record; `reach`: the
-    /// G-buffer pass's reach bits and the lights they stand for, in bit order.
+    /// G-buffer's reach bits and the lights they stand for, in bit order.
     pub(super) fn recorded_mask(&self, lp: &LightPlan, reach: (&[u32], &[usize])) -> Option<Mask> {
         let record = self.record?;
         let r = self.recorded.iter().find(|r| r.light == lp.light)?;
         let values = record.read(self.ctx.gl, r.layer);
         let scissor = lp.scissor.map(|s| [s.x, s.y, s.width, s.height]);
         let rect = Rect::of_scissor(scissor, record.width, record.height);
-        let bit = reach.1.iter().position(|&l| l == lp.light);
+        // A light drawing every fragment it reaches leaves none to mark (outside its clip
+        // planes it draws none, and those are no receivers).
+        let bit = match r.drops_shadowed {
+            true => reach.1.iter().position(|&l| l == lp.light),
+            false => None,
+        };
         Some(mask_from_record(
             lp.light,
             (record.width, record.height),

@@ -9,9 +9,19 @@ impl<'a> FrameRun<'a> {
         let gl = self.ctx.gl;
         self.timer.begin(gl, PassId::frame(Stage::Base));
         self.target.bind(gl);
-        match self.fixed {
-            Some(ff) => fixed::base::draw(&self.ctx, ff),
-            None => passes::base::draw(&self.ctx, &self.programs.unlit),
+        match (self.fixed, self.gbuffer_target()) {
+            (Some(ff), _) => fixed::base::draw(&self.ctx, ff),
+            (None, Some(gtarget)) => {
+                // The frame's own surfaces make the G-buffer, from the same fragments.
+                let reach_lights = self.reach_candidates();
+                gtarget.attach_to_bound(gl);
+                GBufferTarget::draw_into_bound(gl);
+                let program = &self.programs.unlit_gbuffer;
+                passes::base::draw(&self.ctx, program, Some(&reach_lights));
+                GBufferTarget::detach_from_bound(gl);
+                self.reach_lights = Some(reach_lights);
+            }
+            (None, None) => passes::base::draw(&self.ctx, &self.programs.unlit, None),
         }
         go_on!(self.step(StepKind::Base, None, None, Self::color_image));
         Ok(ControlFlow::Continue(()))

@@ -312,7 +312,14 @@ pub struct SampledPath {
     pub masks_ms: f64,
     /// Median milliseconds per frame to trace the samples (rayon, every core).
     pub trace_ms: f64,
-    /// `masks_ms + trace_ms` over the configuration's median frame time.
+    /// On a path sampled frame by frame, how much longer the sampled frames take than the
+    /// configuration's (medians; what writing the G-buffer in the base pass and recording
+    /// each light's decision add to the frame itself); 0 on a still camera, whose one sampled
+    /// frame is the first, its costs those of a cold start.
+    #[serde(default)]
+    pub frame_extra_ms: f64,
+    /// `frame_extra_ms + masks_ms + trace_ms` over the configuration's median frame time:
+    /// what sampling every frame would add to it.
     pub share_of_frame: f64,
     /// Median milliseconds of the sampled frames themselves: beside the configuration's frame
     /// time, what recording each light's decision in its lit pass (`gl::record`) adds.
@@ -321,12 +328,23 @@ pub struct SampledPath {
 }
 
 impl SampledPath {
-    fn new(samples: u32, frames: Vec<error::PathSample>, frame_ms: f64) -> SampledPath {
+    /// `frames` sampled, against the configuration's median `frame_ms`; `along_path`: sampled
+    /// frame by frame along the path rather than once on a still camera.
+    fn new(
+        samples: u32,
+        frames: Vec<error::PathSample>,
+        (frame_ms, along_path): (f64, bool),
+    ) -> SampledPath {
         let mut errors: Vec<f64> = frames.iter().map(|f| f.1.total.value).collect();
         let mut masks: Vec<f64> = frames.iter().map(|f| f.2).collect();
         let mut trace: Vec<f64> = frames.iter().map(|f| f.3).collect();
         let mut own: Vec<f64> = frames.iter().map(|f| f.4).collect();
         let (masks_ms, trace_ms) = (median(&mut masks), median(&mut trace));
+        let sampled_frame_ms = median(&mut own);
+        let frame_extra_ms = match along_path {
+            true => (sampled_frame_ms - frame_ms).max(0.0),
+            false => 0.0,
+        };
         SampledPath {
             samples_per_light: samples,
             max: errors.iter().copied().fold(0.0, f64::max),
@@ -341,12 +359,13 @@ impl SampledPath {
                 .collect(),
             masks_ms,
             trace_ms,
+            frame_extra_ms,
             share_of_frame: if frame_ms > 0.0 {
-                (masks_ms + trace_ms) / frame_ms
+                (frame_extra_ms + masks_ms + trace_ms) / frame_ms
             } else {
                 0.0
             },
-            frame_ms: median(&mut own),
+            frame_ms: sampled_frame_ms,
         }
     }
 }
@@ -892,6 +911,7 @@ impl<'a> Bench<'a> {
             };
             let frame_ms = stats(&m.frame_ms);
             let sampled = if sample {
+                let along_path = first_sample.is_none();
                 let frames = match first_sample {
                     Some(first) => vec![first],
                     None => {
@@ -902,7 +922,7 @@ impl<'a> Bench<'a> {
                 Some(SampledPath::new(
                     c.options.estimate.samples,
                     frames,
-                    frame_ms.median,
+                    (frame_ms.median, along_path),
                 ))
             } else {
                 None
