@@ -56,9 +56,15 @@ fn two_renders_are_bit_identical() {
     assert_eq!(image_difference(&a, &b), (0, 0));
 }
 
-/// EGL and OSMesa give the same frame: identical masks and pixels where one rasteriser is
-/// behind both (Mesa's llvmpipe, or softpipe, serves both libraries), the same decisions away
-/// from the edges where they are two.
+/// EGL and OSMesa give the same frame: identical masks where one rasteriser is behind both
+/// (Mesa's llvmpipe, or softpipe, serves both libraries) and pixels within one step of
+/// rounding, the same decisions away from the edges where they are two.
+///
+/// One step, not none: softpipe shades two renderers' frames of the same scene apart by one
+/// step on 25 000–28 000 lit pixels, EGL against EGL in one process as often as against
+/// OSMesa (shadows off too), in tile-shaped patches, while one renderer's frames are identical
+/// to each other: its additive passes' rounding depends on where the driver keeps the tiles,
+/// not on what was drawn. llvmpipe's frames are identical.
 #[test]
 fn osmesa_matches_egl() {
     let scene = builtin::default_scene();
@@ -89,8 +95,12 @@ fn osmesa_matches_egl() {
             );
         }
         let (max, differing) = image_difference(&egl, &osmesa);
+        println!("{technique}: frames differ by up to {max} on {differing} px");
         if same {
-            assert_eq!((max, differing), (0, 0), "{technique}: the frames differ");
+            assert!(
+                max <= 1,
+                "{technique}: the frames differ by {max} on {differing} px"
+            );
         } else {
             // Two rasterisers: the same decisions (above); shading may round apart.
             assert!(
