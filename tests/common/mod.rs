@@ -146,6 +146,20 @@ pub fn render_masks_on(
     .unwrap()
 }
 
+/// Asserts that two frames of one scene, drawn by two renderers on one rasteriser, agree in
+/// colour within one step per light's additive pass: softpipe rounds two renderers' passes
+/// apart on tile-shaped patches (EGL against EGL in one process too), while one renderer's
+/// frames are identical and llvmpipe's are (docs/drivers.md). Masks are compared apart, exactly.
+pub fn assert_colours_within_rounding(a: &Frame, b: &Frame, what: &str) {
+    let (max, differing) = image_difference(a, b);
+    let passes = a.plan_stats.lights_planned.max(1);
+    println!("{what}: frames differ by up to {max} on {differing} px");
+    assert!(
+        usize::from(max) <= passes,
+        "{what}: {differing} pixels differ by up to {max} ({passes} light passes)"
+    );
+}
+
 /// Largest per-channel difference and the number of pixels that differ at all.
 pub fn image_difference(a: &Frame, b: &Frame) -> (u8, usize) {
     assert_eq!((a.width(), a.height()), (b.width(), b.height()));
