@@ -36,7 +36,9 @@ pub struct Args {
     #[arg(long)]
     no_motion: bool,
     /// Sample every n-th measured frame against the sampled reference (default: 4 on a
-    /// recorded path, else 1).
+    /// recorded path, else 1). The frames between are drawn too, plain, so that each sampled
+    /// frame moves one step as the timed frames do and the plain frame after it shows what
+    /// sampling added to the frame.
     #[arg(long)]
     sample_every: Option<usize>,
     /// MiB the round-robin renderers may hold together (their shadow maps as planned for the

@@ -144,18 +144,17 @@ impl DecisionRecord {
         }
     }
 
-    /// Layer `layer`, top row first, a (lit, shadowed) pair per pixel.
-    pub fn read(&self, gl: &glow::Context, layer: u32) -> Vec<[u8; 2]> {
+    /// Layer `layer`, top row first, a (lit, shadowed) pair of bytes per pixel.
+    pub fn read(&self, gl: &glow::Context, layer: u32) -> Vec<u8> {
         self.bind_layer(gl, layer);
-        let bytes: Vec<u8> = read_pixels(
+        read_pixels(
             gl,
             Some(self.read_fbo),
             Some(glow::COLOR_ATTACHMENT0),
             (self.width, self.height),
             (glow::RG, glow::UNSIGNED_BYTE),
             2,
-        );
-        bytes.chunks_exact(2).map(|p| [p[0], p[1]]).collect()
+        )
     }
 
     pub fn delete(&self, gl: &glow::Context) {

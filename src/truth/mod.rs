@@ -8,6 +8,7 @@ pub mod recorded;
 pub mod reference;
 pub mod sampled;
 pub mod subdivision;
+pub mod tile_order;
 
 pub use masks::{Tracing, compare_majority, majority, reference_mask};
 pub use measure::{ExactMasks, Measurement, exact_mask, measure, measure_with};

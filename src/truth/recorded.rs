@@ -72,12 +72,14 @@ pub fn mask_from_record(
     let w = width as usize;
     let mut values = vec![MaskValue::NotReceiver as u8; w * height as usize];
     for y in rect.y0 as usize..rect.y1 as usize {
-        for x in rect.x0 as usize..rect.x1 as usize {
-            let i = y * w + x;
-            values[i] = match Recorded::of(record[i]) {
+        let row = y * w + rect.x0 as usize..y * w + rect.x1 as usize;
+        let start = row.start;
+        let pairs = values[row.clone()].iter_mut().zip(&record[row]);
+        for (k, (value, &pixel)) in pairs.enumerate() {
+            *value = match Recorded::of(pixel) {
                 Recorded::Lit => MaskValue::Lit,
                 Recorded::Shadowed => MaskValue::Shadowed,
-                Recorded::Nothing if reached(i) => MaskValue::Shadowed,
+                Recorded::Nothing if reached(start + k) => MaskValue::Shadowed,
                 Recorded::Nothing => MaskValue::NotReceiver,
             } as u8;
         }

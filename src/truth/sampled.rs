@@ -14,14 +14,12 @@
 //! conservative. With as many samples as pixels, every pixel is traced and the interval closes.
 
 use super::reference::{Reference, shadow_ray_origin};
+use super::tile_order::TileOrder;
 use crate::images::{Mask, MaskValue, Surfaces};
 use crate::scene::Light;
 use glam::Vec3;
 use rayon::prelude::*;
 use serde::Serialize;
-
-/// Side of the square tiles the strata follow.
-const TILE: u32 = 16;
 
 /// Standard normal quantile of the 95% two-sided interval.
 const Z95: f64 = 1.959_964;
@@ -95,41 +93,27 @@ pub struct FrameSample {
     pub rays: usize,
 }
 
-/// The pixel of each stratum: `n` strata over `pixels` (in tile order), one uniform pick in each,
-/// with the stratum's length as weight. Every pixel when `n` covers them all.
-fn stratified(pixels: &[u32], n: usize, rng: &mut fastrand::Rng) -> Vec<(u32, f64)> {
-    let m = pixels.len();
+/// The pixel of each stratum: `n` strata over the `m` pixels `nth` numbers (in tile order),
+/// one uniform pick in each, with the stratum's length as weight. Every pixel when `n` covers
+/// them all.
+fn stratified(
+    m: usize,
+    n: usize,
+    rng: &mut fastrand::Rng,
+    nth: impl Fn(usize) -> Option<u32>,
+) -> Vec<(u32, f64)> {
     if n == 0 || m == 0 {
         return Vec::new();
     }
     if n >= m {
-        return pixels.iter().map(|&p| (p, 1.0)).collect();
+        return (0..m).filter_map(|k| Some((nth(k)?, 1.0))).collect();
     }
     (0..n)
-        .map(|k| {
+        .filter_map(|k| {
             let (start, end) = (k * m / n, (k + 1) * m / n);
-            (pixels[rng.usize(start..end)], (end - start) as f64)
+            Some((nth(rng.usize(start..end))?, (end - start) as f64))
         })
         .collect()
-}
-
-/// The mask's receiver pixels (row-major indices) in tile order.
-fn receivers_in_tile_order(mask: &Mask) -> Vec<u32> {
-    let (w, h) = (mask.width, mask.height);
-    let mut out = Vec::new();
-    for ty in (0..h).step_by(TILE as usize) {
-        for tx in (0..w).step_by(TILE as usize) {
-            for y in ty..(ty + TILE).min(h) {
-                for x in tx..(tx + TILE).min(w) {
-                    let i = y * w + x;
-                    if mask.values[i as usize] != MaskValue::NotReceiver as u8 {
-                        out.push(i);
-                    }
-                }
-            }
-        }
-    }
-    out
 }
 
 /// The random stream of light `light` in frame `frame`: the same seed, frame and light give the
@@ -168,11 +152,11 @@ pub struct Picks {
 
 /// `mask`'s picks for `n` samples from `rng`.
 pub fn picks_of(mask: &Mask, n: usize, rng: &mut fastrand::Rng) -> Picks {
-    let pixels = receivers_in_tile_order(mask);
+    let order = TileOrder::of(mask);
     Picks {
         light: mask.light,
-        picks: stratified(&pixels, n, rng),
-        receivers: pixels.len(),
+        picks: stratified(order.receivers(), n, rng, |k| order.nth(k)),
+        receivers: order.receivers(),
     }
 }
 
@@ -186,7 +170,7 @@ pub fn frame_picks(
     frame: u64,
 ) -> Vec<Picks> {
     masks
-        .iter()
+        .par_iter()
         .filter(|m| m.light < lights.len())
         .map(|m| picks_of(m, n, &mut stream(seed, frame, m.light)))
         .collect()
@@ -376,31 +360,15 @@ mod tests {
     fn strata_cover_the_pixels_evenly_and_every_pixel_when_few() {
         let pixels: Vec<u32> = (0..1000).collect();
         let mut rng = fastrand::Rng::with_seed(7);
-        let picks = stratified(&pixels, 100, &mut rng);
+        let picks = stratified(1000, 100, &mut rng, |k| pixels.get(k).copied());
         assert_eq!(picks.len(), 100);
         for (k, (p, w)) in picks.iter().enumerate() {
             assert_eq!(*w, 10.0);
             assert_eq!(*p as usize / 10, k, "pick {k} outside its stratum");
         }
-        let all = stratified(&pixels[..50], 100, &mut rng);
+        let all = stratified(50, 100, &mut rng, |k| pixels.get(k).copied());
         assert_eq!(all.len(), 50);
         assert!(all.iter().all(|p| p.1 == 1.0));
-    }
-
-    #[test]
-    fn tile_order_keeps_receivers_only_and_walks_tiles() {
-        let mut m = Mask {
-            light: 0,
-            width: 40,
-            height: 2,
-            values: vec![1; 80],
-        };
-        m.values[3] = 0;
-        let order = receivers_in_tile_order(&m);
-        assert_eq!(order.len(), 79);
-        // The first tile (x < 16) finishes both rows before x = 16 starts.
-        assert_eq!(order[15], 40);
-        assert_eq!(order[31], 16);
     }
 
     #[test]

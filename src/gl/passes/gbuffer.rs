@@ -1,23 +1,26 @@
 //! The G-buffer, for the exact reference: world position and normal of the visible surface at
 //! every pixel, and which stenciled lights reach it. Written by the base pass itself in frames
-//! asked for masks (`unlit.frag` with `GBUFFER`, its outputs 1–3 attached to the frame), so the
+//! asked for masks (`unlit.frag` with `GBUFFER`, its outputs 1–2 attached to the frame), so the
 //! surfaces are the frame's own and no second pass draws the world again.
 
 use super::PassContext;
 use crate::gl::program::Program;
+use crate::gl::target::GBUFFER_OUTPUTS;
 use glow::HasContext;
 
 /// The most lights whose reach one G-buffer records (a bit each of a 32-bit target).
 pub const REACH_LIGHTS: usize = 32;
 
-/// Clears the G-buffer's outputs (draw buffers 1–3) of the bound framebuffer: no surface.
+/// Clears the G-buffer's outputs of the bound framebuffer: no surface. Draw buffer k is
+/// attachment k there ([`GBUFFER_OUTPUTS`]).
 pub fn clear(gl: &glow::Context) {
-    // SAFETY: clears of the bound framebuffer's G-buffer draw buffers (the reach target is an
-    // integer one, which glClear leaves undefined).
+    // SAFETY: clears of the bound framebuffer's G-buffer draw buffers (integer ones, which
+    // glClear leaves undefined): kind 0 is no surface, no reach bit set.
     unsafe {
-        gl.clear_buffer_f32_slice(glow::COLOR, 1, &[0.0; 4]);
-        gl.clear_buffer_f32_slice(glow::COLOR, 2, &[0.0; 4]);
-        gl.clear_buffer_u32_slice(glow::COLOR, 3, &[0; 4]);
+        for attachment in GBUFFER_OUTPUTS {
+            let draw_buffer = attachment - glow::COLOR_ATTACHMENT0;
+            gl.clear_buffer_u32_slice(glow::COLOR, draw_buffer, &[0; 4]);
+        }
     }
 }
 

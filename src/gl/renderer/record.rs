@@ -138,7 +138,7 @@ impl<'a> FrameRun<'a> {
                 &self.ctx,
                 &self.programs.record_reach,
                 lp,
-                gtarget.textures(),
+                gtarget.surface(),
                 self.empty_vao,
             );
         }
@@ -162,7 +162,7 @@ impl<'a> FrameRun<'a> {
         Some(mask_from_record(
             lp.light,
             (record.width, record.height),
-            &values,
+            values.as_chunks::<2>().0,
             rect,
             bit.map(|b| (reach.0, b as u32)),
         ))

@@ -19,7 +19,10 @@ use std::time::Instant;
 
 /// One sampled frame of a path: its index, the sample, milliseconds of masks and of tracing,
 /// and of the frame itself (whose lit passes recorded its decisions).
-pub(super) type PathSample = (usize, FrameSample, f64, f64, f64);
+/// A sampled frame of the path: its index, sample, milliseconds of masks, of tracing and of
+/// the frame itself, and of the plain frame drawn right after it (along a path sampled every
+/// few frames: the same motion, one step, without masks).
+pub(super) type PathSample = (usize, FrameSample, f64, f64, f64, Option<f64>);
 
 /// A configuration's error, with its first frame's sample when one was asked for.
 pub(super) type Errored = (FrameError, Option<PathSample>);
@@ -139,10 +142,21 @@ impl<'a> Bench<'a> {
         &mut self,
         options: &Options,
     ) -> Result<Vec<PathSample>, RenderError> {
-        let mut out = Vec::with_capacity(self.settings.frames);
+        let mut out: Vec<PathSample> = Vec::with_capacity(self.settings.frames);
         let moving = self.settings.scene_moves(&self.scene);
-        for i in (0..self.settings.frames.max(1)).step_by(self.settings.sample_every.max(1)) {
+        let every = self.settings.sample_every.max(1);
+        for i in 0..self.settings.frames.max(1) {
             self.settings.pose(&mut self.scene, i);
+            if i % every != 0 {
+                // The frames between samples are drawn too, plain: every frame then moves
+                // one step from the last, as the timed ones do, and the one after a sampled
+                // frame is what that frame costs without sampling, at the same moment.
+                let plain_ms = self.plain_frame_ms(options, i)?;
+                if let Some(last) = out.last_mut().filter(|l| l.0 + 1 == i) {
+                    last.5 = Some(plain_ms);
+                }
+                continue;
+            }
             let camera = self.settings.camera(&self.scene, i);
             // A moving scene's casters are where this frame put them: a reference of its
             // own, built again when a model moved (untimed, like the rest of the sampling).
@@ -167,9 +181,22 @@ impl<'a> Bench<'a> {
                 reference,
                 (i as u64, true, GBufferRead::Picks),
             )?;
-            out.push((i, s.sample, s.masks_ms, s.trace_ms, s.frame.frame_ms));
+            out.push((i, s.sample, s.masks_ms, s.trace_ms, s.frame.frame_ms, None));
         }
         Ok(out)
+    }
+
+    /// Path frame `i` drawn without masks (the scene posed for it): its frame time.
+    fn plain_frame_ms(&mut self, options: &Options, i: usize) -> Result<f64, RenderError> {
+        let camera = self.settings.camera(&self.scene, i);
+        let request = FrameRequest {
+            frame_only: true,
+            ..FrameRequest::default()
+        };
+        let frame = self
+            .renderer
+            .render_at(&self.scene, &camera, options, request)?;
+        Ok(frame.frame_ms)
     }
 
     /// Whether [`Bench::error`] of `options` would be taken from the view, drawing nothing.
@@ -201,7 +228,7 @@ impl<'a> Bench<'a> {
         let sampled = if sample {
             let reference = self.view.exact.reference(&self.scene);
             let (s, trace_ms) = sample_masks(reference, &self.scene, (&c.frame, None), options, 0)?;
-            Some((0, s, masks_ms, trace_ms, c.frame.frame_ms))
+            Some((0, s, masks_ms, trace_ms, c.frame.frame_ms, None))
         } else {
             None
         };

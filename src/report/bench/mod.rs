@@ -312,10 +312,9 @@ pub struct SampledPath {
     pub masks_ms: f64,
     /// Median milliseconds per frame to trace the samples (rayon, every core).
     pub trace_ms: f64,
-    /// On a path sampled frame by frame, how much longer the sampled frames take than the
-    /// configuration's (medians; what writing the G-buffer in the base pass and recording
-    /// each light's decision add to the frame itself); 0 on a still camera, whose one sampled
-    /// frame is the first, its costs those of a cold start.
+    /// What the G-buffer and the record add to a frame along a path: the median excess of
+    /// each sampled frame over the plain one drawn right after it (sampled every few frames),
+    /// else of the sampled frames' median over the configuration's; 0 on a still camera.
     #[serde(default)]
     pub frame_extra_ms: f64,
     /// `frame_extra_ms + masks_ms + trace_ms` over the configuration's median frame time:
@@ -341,9 +340,13 @@ impl SampledPath {
         let mut own: Vec<f64> = frames.iter().map(|f| f.4).collect();
         let (masks_ms, trace_ms) = (median(&mut masks), median(&mut trace));
         let sampled_frame_ms = median(&mut own);
-        let frame_extra_ms = match along_path {
-            true => (sampled_frame_ms - frame_ms).max(0.0),
-            false => 0.0,
+        // Each sampled frame against the plain frame drawn right after it where there is one
+        // (the same motion, moments apart); else against the timed frames, drawn earlier.
+        let mut paired: Vec<f64> = frames.iter().filter_map(|f| Some(f.4 - f.5?)).collect();
+        let frame_extra_ms = match (along_path, paired.is_empty()) {
+            (false, _) => 0.0,
+            (true, false) => median(&mut paired).max(0.0),
+            (true, true) => (sampled_frame_ms - frame_ms).max(0.0),
         };
         SampledPath {
             samples_per_light: samples,
@@ -1080,6 +1083,32 @@ mod tests {
         let h = stats(&hundred);
         assert_eq!((h.p95, h.p99, h.max), (95.0, 99.0, 100.0));
         assert_eq!(stats(&[7.0]).p99, 7.0);
+    }
+
+    /// A sampled frame's excess is over the plain frame drawn right after it: 50, 20, 60 ms
+    /// over 45, 18, 52 is 5, 2, 8, median 5 (the medians over a configuration's 40 ms: 10).
+    #[test]
+    fn sampled_frames_are_weighed_against_the_plain_frame_after_them() {
+        let frame = |i, own, plain| (i, Default::default(), 1.0, 0.5, own, plain);
+        let paired = vec![
+            frame(0, 50.0, Some(45.0)),
+            frame(4, 20.0, Some(18.0)),
+            frame(8, 60.0, Some(52.0)),
+        ];
+        let p = SampledPath::new(512, paired, (40.0, true));
+        assert_eq!(p.frame_extra_ms, 5.0);
+        assert_eq!(p.frame_ms, 50.0);
+        assert_eq!(p.share_of_frame, (5.0 + 1.0 + 0.5) / 40.0);
+        let unpaired = vec![frame(0, 50.0, None), frame(1, 44.0, None)];
+        assert_eq!(
+            SampledPath::new(512, unpaired.clone(), (40.0, true)).frame_extra_ms,
+            7.0
+        );
+        // A still camera's one sampled frame is the cold first one: no excess counted.
+        assert_eq!(
+            SampledPath::new(512, unpaired, (40.0, false)).frame_extra_ms,
+            0.0
+        );
     }
 
     /// Ratios are taken path frame by path frame, not median over median: frames of 40, 3, 9,
