@@ -17,11 +17,9 @@ use crate::truth::{Counts, ExactMasks, Reference};
 use std::collections::HashMap;
 use std::time::Instant;
 
-/// One sampled frame of a path: its index, the sample, milliseconds of masks and of tracing,
-/// and of the frame itself (whose lit passes recorded its decisions).
-/// A sampled frame of the path: its index, sample, milliseconds of masks, of tracing and of
-/// the frame itself, and of the plain frame drawn right after it (along a path sampled every
-/// few frames: the same motion, one step, without masks).
+/// One sampled frame of a path: its index, the sample, milliseconds of masks, of tracing and
+/// of the frame itself (whose lit passes recorded its decisions), and of the plain frame drawn
+/// right after it (along a path sampled every few frames: the same motion, without masks).
 pub(super) type PathSample = (usize, FrameSample, f64, f64, f64, Option<f64>);
 
 /// A configuration's error, with its first frame's sample when one was asked for.
