@@ -24,35 +24,6 @@ bool light_reaches(vec3 p, vec3 n, vec3 light_pos, vec3 spot_dir, float cos_cuto
     return true;
 }
 
-// The G-buffer's surface texel (gl/target.rs GBufferTarget): the position's float bits in xyz,
-// and in w a unit normal in octahedral coordinates, 15 bits each, over the kind in the low two
-// bits (0 background, 1 receives dynamic light, 2 does not). One attachment, not two: on a
-// CPU rasteriser each colour output costs the base pass about a millisecond a frame.
-uvec4 pack_surface(vec3 p, vec3 n, uint kind) {
-    vec2 o = n.xy / (abs(n.x) + abs(n.y) + abs(n.z));
-    if (n.z < 0.0) {
-        vec2 s = vec2(o.x >= 0.0 ? 1.0 : -1.0, o.y >= 0.0 ? 1.0 : -1.0);
-        o = (1.0 - abs(o.yx)) * s;
-    }
-    uvec2 q = uvec2(round(clamp(o * 0.5 + 0.5, 0.0, 1.0) * 32767.0));
-    return uvec4(floatBitsToUint(p), (q.x << 17) | (q.y << 2) | kind);
-}
-vec3 surface_position(uvec4 t) {
-    return uintBitsToFloat(t.xyz);
-}
-uint surface_kind(uvec4 t) {
-    return t.w & 3u;
-}
-vec3 surface_normal(uvec4 t) {
-    vec2 o = vec2(uvec2(t.w >> 17, t.w >> 2) & 32767u) / 32767.0 * 2.0 - 1.0;
-    vec3 n = vec3(o, 1.0 - abs(o.x) - abs(o.y));
-    if (n.z < 0.0) {
-        vec2 s = vec2(n.x >= 0.0 ? 1.0 : -1.0, n.y >= 0.0 ? 1.0 : -1.0);
-        n.xy = (1.0 - abs(n.yx)) * s;
-    }
-    return normalize(n);
-}
-
 #if defined(ID_TABLE) && defined(FRAGMENT_STAGE)
 // Per-triangle table of ID and priority buffers (gl/id_tables.rs): row-major, 1024 texels a
 // row, at the triangle's place in the GPU index buffer.

@@ -2,7 +2,8 @@
 // (its stencil dropped them: shadowed), added over its layer (gl/record.rs)
 // as (0, 1); a pixel the pass lit stays lit. The reach is the lit pass's own test, on the
 // G-buffer's position and normal.
-uniform highp usampler2D u_surface;   // common.glsl pack_surface
+uniform sampler2D u_position;
+uniform sampler2D u_normal;   // w: 1 = takes dynamic light (gbuffer.frag)
 uniform vec3 u_light_pos;
 uniform vec3 u_spot_dir;
 uniform float u_cos_cutoff;
@@ -11,10 +12,9 @@ out vec4 o_decision;
 
 void main() {
     ivec2 at = ivec2(gl_FragCoord.xy);
-    uvec4 s = texelFetch(u_surface, at, 0);
-    if (surface_kind(s) != 1u) discard;
-    vec3 p = surface_position(s);
-    vec3 n = surface_normal(s);
-    if (!light_reaches(p, n, u_light_pos, u_spot_dir, u_cos_cutoff, u_radius)) discard;
+    vec4 n = texelFetch(u_normal, at, 0);
+    if (n.w != 1.0) discard;
+    vec3 p = texelFetch(u_position, at, 0).xyz;
+    if (!light_reaches(p, n.xyz, u_light_pos, u_spot_dir, u_cos_cutoff, u_radius)) discard;
     o_decision = vec4(0.0, 1.0, 0.0, 0.0);
 }

@@ -28,14 +28,16 @@ uniform vec4 u_reach_position_radius[32];
 uniform vec4 u_reach_direction_cutoff[32];
 
 // Location 1 is free here (the lit pass's record uses it later, on another program).
-// Position, normal and kind packed (common.glsl pack_surface).
-layout(location = 1) out uvec4 o_surface;
-layout(location = 2) out uint o_reach;
+layout(location = 1) out vec4 o_position;
+// normal.w: 1 = the surface receives dynamic light, 2 = it does not; 0 (clear) = background.
+layout(location = 2) out vec4 o_normal;
+layout(location = 3) out uint o_reach;
 
 void write_gbuffer() {
     // The same normal the lit pass shades with.
     vec3 n = normalize(gl_FrontFacing ? v_normal : -v_normal);
-    o_surface = pack_surface(v_world, n, u_receives != 0 ? 1u : 2u);
+    o_position = vec4(v_world, 1.0);
+    o_normal = vec4(n, u_receives != 0 ? 1.0 : 2.0);
     uint reach = 0u;
     if (u_receives != 0) {
         for (int k = 0; k < u_reach_lights; k++) {

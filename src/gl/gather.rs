@@ -1,7 +1,7 @@
 //! The G-buffer read at picked pixels only: a point per pixel, drawn into a small target that
 //! copies the G-buffer there (`gather.vert`/`gather.frag`), read back in one call. The sampled
-//! reference traces a few hundred pixels per light; reading the whole G-buffer back (4.9 MB at
-//! 640×480) cost it more than the frame's masks and its rays together.
+//! reference traces a few hundred pixels per light; reading the whole G-buffer back (two
+//! RGBA32F images) cost it more than the frame's masks and its rays together.
 
 use super::program::Program;
 use super::target::{GBUFFER_OUTPUTS, GBufferTarget, read_pixels_bottom_up};
@@ -74,6 +74,7 @@ impl Gather {
             .iter()
             .flat_map(|&i| [(i % w) as f32, (h - 1 - i / w) as f32])
             .collect();
+        let (position, normal) = gbuffer.textures();
         let rows = (n as u32).div_ceil(COLUMNS);
         // SAFETY: our own buffer, target and program; state set for a plain draw of points.
         unsafe {
@@ -90,23 +91,29 @@ impl Gather {
             program.bind(gl);
             program.set_i32(gl, "u_columns", COLUMNS as i32);
             program.set_vec2(gl, "u_size", glam::Vec2::new(COLUMNS as f32, rows as f32));
-            program.set_i32(gl, "u_surface", 0);
+            program.set_i32(gl, "u_position", 0);
+            program.set_i32(gl, "u_normal", 1);
+            gl.active_texture(glow::TEXTURE1);
+            gl.bind_texture(glow::TEXTURE_2D, Some(normal));
             gl.active_texture(glow::TEXTURE0);
-            gl.bind_texture(glow::TEXTURE_2D, Some(gbuffer.surface()));
+            gl.bind_texture(glow::TEXTURE_2D, Some(position));
             gl.bind_vertex_array(Some(self.vao));
             gl.draw_arrays(glow::POINTS, 0, n as i32);
             gl.bind_vertex_array(None);
             gl.enable(glow::DEPTH_TEST);
         }
-        let surface: Vec<[u32; 4]> = read_pixels_bottom_up(
-            gl,
-            Some(self.target.fbo),
-            Some(GBUFFER_OUTPUTS[0]),
-            (COLUMNS, rows),
-            (glow::RGBA_INTEGER, glow::UNSIGNED_INT),
-            1,
-        );
-        let (position, normal, kind) = GBufferTarget::fields(&surface[..n]);
+        let read = |attachment: u32| -> Vec<[f32; 4]> {
+            read_pixels_bottom_up(
+                gl,
+                Some(self.target.fbo),
+                Some(attachment),
+                (COLUMNS, rows),
+                (glow::RGBA, glow::FLOAT),
+                1,
+            )
+        };
+        let (p, nk) = (read(GBUFFER_OUTPUTS[0]), read(GBUFFER_OUTPUTS[1]));
+        let (position, normal, kind) = GBufferTarget::fields(&p[..n], &nk[..n]);
         GBufferPicks {
             pixels,
             position,

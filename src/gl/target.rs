@@ -362,17 +362,21 @@ pub(crate) fn check_complete(gl: &glow::Context, what: &str) -> Result<(), Strin
     }
 }
 
-/// G-buffer for the exact reference: per pixel the visible surface's position (its float bits)
-/// and normal and kind packed in one RGBA32UI texel (`common.glsl` `pack_surface`), which of
-/// the recording lights reach it (a bit each), own depth.
-/// Where the G-buffer's surface and reach bits are attached, in its own framebuffer and in the
-/// frame's during its base pass: outputs 1–2 of `unlit.frag` (and 1 of `gather.frag`), as ES
-/// wants output k at attachment k, with 0 the frame's colour.
-pub const GBUFFER_OUTPUTS: [u32; 2] = [glow::COLOR_ATTACHMENT1, glow::COLOR_ATTACHMENT2];
+/// G-buffer for the exact reference: world position and normal as 32-bit floats, which of
+/// the recording lights reach each pixel (a bit each), own depth.
+/// Where the G-buffer's position, normal and reach bits are attached, in its own framebuffer
+/// and in the frame's during its base pass: outputs 1–3 of `unlit.frag` (and `gather.frag`),
+/// as ES wants output k at attachment k, with 0 the frame's colour.
+pub const GBUFFER_OUTPUTS: [u32; 3] = [
+    glow::COLOR_ATTACHMENT1,
+    glow::COLOR_ATTACHMENT2,
+    glow::COLOR_ATTACHMENT3,
+];
 
 pub struct GBufferTarget {
     pub fbo: glow::Framebuffer,
-    surface: glow::Texture,
+    position: glow::Texture,
+    normal: glow::Texture,
     reach: glow::Texture,
     depth: glow::Texture,
     pub width: u32,
@@ -381,14 +385,8 @@ pub struct GBufferTarget {
 
 impl GBufferTarget {
     pub fn new(gl: &glow::Context, width: u32, height: u32) -> Result<GBufferTarget, String> {
-        let surface = texture_2d(
-            gl,
-            glow::RGBA32UI,
-            glow::RGBA_INTEGER,
-            glow::UNSIGNED_INT,
-            width,
-            height,
-        )?;
+        let position = texture_2d(gl, glow::RGBA32F, glow::RGBA, glow::FLOAT, width, height)?;
+        let normal = texture_2d(gl, glow::RGBA32F, glow::RGBA, glow::FLOAT, width, height)?;
         let reach = texture_2d(
             gl,
             glow::R32UI,
@@ -418,7 +416,8 @@ impl GBufferTarget {
             );
             let t = GBufferTarget {
                 fbo,
-                surface,
+                position,
+                normal,
                 reach,
                 depth,
                 width,
@@ -426,7 +425,12 @@ impl GBufferTarget {
             };
             t.attach_to_bound(gl);
             // Output 0 (the frame's colour, in the unlit pass) goes nowhere here.
-            gl.draw_buffers(&[glow::NONE, GBUFFER_OUTPUTS[0], GBUFFER_OUTPUTS[1]]);
+            gl.draw_buffers(&[
+                glow::NONE,
+                GBUFFER_OUTPUTS[0],
+                GBUFFER_OUTPUTS[1],
+                GBUFFER_OUTPUTS[2],
+            ]);
             let ok = check_complete(gl, "G-buffer");
             gl.bind_framebuffer(glow::FRAMEBUFFER, None);
             if let Err(e) = ok {
@@ -437,11 +441,15 @@ impl GBufferTarget {
         }
     }
 
-    /// Attaches the surface and reach textures to the bound framebuffer at
+    /// Attaches the position, normal and reach textures to the bound framebuffer at
     /// [`GBUFFER_OUTPUTS`] (the frame's, for its base pass to write them too: `unlit.frag`
     /// with `GBUFFER`), draw buffers left as they are.
     pub fn attach_to_bound(&self, gl: &glow::Context) {
-        for (attachment, tex) in GBUFFER_OUTPUTS.into_iter().zip([self.surface, self.reach]) {
+        for (attachment, tex) in
+            GBUFFER_OUTPUTS
+                .into_iter()
+                .zip([self.position, self.normal, self.reach])
+        {
             // SAFETY: our own textures, on the bound framebuffer.
             unsafe {
                 gl.framebuffer_texture_2d(
@@ -476,24 +484,32 @@ impl GBufferTarget {
         }
     }
 
-    /// The surface attachment, top row first (a packed texel per pixel).
-    pub fn read(&self, gl: &glow::Context) -> Vec<[u32; 4]> {
+    /// Reads the position (0) or normal (1) attachment, top row first.
+    pub fn read(&self, gl: &glow::Context, attachment: usize) -> Vec<[f32; 4]> {
         read_pixels(
             gl,
             Some(self.fbo),
-            Some(GBUFFER_OUTPUTS[0]),
+            Some(GBUFFER_OUTPUTS[attachment]),
             (self.width, self.height),
-            (glow::RGBA_INTEGER, glow::UNSIGNED_INT),
+            (glow::RGBA, glow::FLOAT),
             1,
         )
     }
 
-    /// Surface texels as read back (`common.glsl` `pack_surface`) made the G-buffer's fields:
-    /// positions, normals and each pixel's kind.
-    pub fn fields(surface: &[[u32; 4]]) -> (Vec<[f32; 3]>, Vec<[f32; 3]>, Vec<u8>) {
-        let position = surface.iter().map(surface_position).collect();
-        let (normal, kind) = surface.iter().map(|t| unpack_normal(t[3])).unzip();
-        (position, normal, kind)
+    /// Position and normal texels as read back (`unlit.frag`'s G-buffer outputs) made the
+    /// G-buffer's fields: positions, normals, and each pixel's kind from the normal's w.
+    pub fn fields(
+        position: &[[f32; 4]],
+        normal: &[[f32; 4]],
+    ) -> (Vec<[f32; 3]>, Vec<[f32; 3]>, Vec<u8>) {
+        (
+            position.iter().map(|p| [p[0], p[1], p[2]]).collect(),
+            normal.iter().map(|n| [n[0], n[1], n[2]]).collect(),
+            normal
+                .iter()
+                .map(|n| n[3].round().clamp(0.0, 2.0) as u8)
+                .collect(),
+        )
     }
 
     /// The reach bits, top row first.
@@ -501,47 +517,28 @@ impl GBufferTarget {
         read_pixels(
             gl,
             Some(self.fbo),
-            Some(GBUFFER_OUTPUTS[1]),
+            Some(GBUFFER_OUTPUTS[2]),
             (self.width, self.height),
             (glow::RED_INTEGER, glow::UNSIGNED_INT),
             1,
         )
     }
 
-    /// The surface texture.
-    pub fn surface(&self) -> glow::Texture {
-        self.surface
+    /// The position and normal textures.
+    pub fn textures(&self) -> (glow::Texture, glow::Texture) {
+        (self.position, self.normal)
     }
 
     pub fn delete(&self, gl: &glow::Context) {
         // SAFETY: called once by the owner.
         unsafe {
             gl.delete_framebuffer(self.fbo);
-            gl.delete_texture(self.surface);
+            gl.delete_texture(self.position);
+            gl.delete_texture(self.normal);
             gl.delete_texture(self.reach);
             gl.delete_texture(self.depth);
         }
     }
-}
-
-/// A surface texel's position: its float bits.
-fn surface_position(t: &[u32; 4]) -> [f32; 3] {
-    [t[0], t[1], t[2]].map(f32::from_bits)
-}
-
-/// A surface texel's w: the unit normal from its octahedral coordinates (15 bits each) and the
-/// kind in the low two bits, as `common.glsl` `surface_normal` reads it.
-pub fn unpack_normal(w: u32) -> ([f32; 3], u8) {
-    let coordinate = |bits: u32| (bits & 0x7fff) as f32 / 32767.0 * 2.0 - 1.0;
-    let (x, y) = (coordinate(w >> 17), coordinate(w >> 2));
-    let z = 1.0 - x.abs() - y.abs();
-    let sign = |v: f32| if v >= 0.0 { 1.0 } else { -1.0 };
-    let (x, y) = match z < 0.0 {
-        true => ((1.0 - y.abs()) * sign(x), (1.0 - x.abs()) * sign(y)),
-        false => (x, y),
-    };
-    let n = glam::Vec3::new(x, y, z).normalize_or_zero();
-    (n.to_array(), (w & 3) as u8)
 }
 
 /// One-channel decision mask drawn over the frame's own depth and stencil.
@@ -609,44 +606,6 @@ impl MaskTarget {
 
 #[cfg(test)]
 mod tests {
-    /// `common.glsl` `pack_surface`'s w, in Rust: octahedral coordinates of the unit normal
-    /// `n`, 15 bits each, over the kind.
-    fn pack_normal(n: glam::Vec3, kind: u32) -> u32 {
-        let mut o = glam::Vec2::new(n.x, n.y) / (n.x.abs() + n.y.abs() + n.z.abs());
-        if n.z < 0.0 {
-            let sign = |v: f32| if v >= 0.0 { 1.0 } else { -1.0 };
-            o = glam::Vec2::new((1.0 - o.y.abs()) * sign(o.x), (1.0 - o.x.abs()) * sign(o.y));
-        }
-        let q = ((o * 0.5 + 0.5).clamp(glam::Vec2::ZERO, glam::Vec2::ONE) * 32767.0).round();
-        ((q.x as u32) << 17) | ((q.y as u32) << 2) | kind
-    }
-
-    /// Every direction comes back within 1.5e-4 radians (about a hundredth of a degree, a
-    /// thirteenth of the 0.11° grazing angle receivers are cut at), on both hemispheres and
-    /// the axes, and the kind exactly. Half a 15-bit step is 3.1e-5 in each octahedral
-    /// coordinate, which the mapping stretches up to about four times in angle (10 000 random
-    /// directions: 1.2e-4 at most).
-    #[test]
-    fn packed_normals_come_back_within_a_hundredth_of_a_degree() {
-        let mut rng = fastrand::Rng::with_seed(5);
-        let mut normals = vec![glam::Vec3::X, -glam::Vec3::Y, glam::Vec3::Z, -glam::Vec3::Z];
-        normals.extend((0..10_000).map(|_| {
-            let v = glam::Vec3::new(rng.f32(), rng.f32(), rng.f32()) * 2.0 - 1.0;
-            v.normalize_or(glam::Vec3::X)
-        }));
-        for (i, n) in normals.into_iter().enumerate() {
-            let kind = (i % 3) as u32;
-            let (back, k) = super::unpack_normal(pack_normal(n, kind));
-            // In double precision: f32's acos near 1 resolves no better than 3e-4 radians.
-            let (b, n) = (glam::Vec3::from_array(back).as_dvec3(), n.as_dvec3());
-            let angle = b.cross(n).length().atan2(b.dot(n));
-            assert!(angle < 1.5e-4, "{n} came back as {back:?}, {angle} rad off");
-            assert_eq!(u32::from(k), kind);
-        }
-        // A cleared texel is the background.
-        assert_eq!(super::unpack_normal(0).1, 0);
-    }
-
     #[test]
     fn flip_rows_reverses_row_order() {
         let mut d = vec![1, 1, 2, 2, 3, 3];

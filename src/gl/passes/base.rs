@@ -8,7 +8,7 @@ use glam::Vec3;
 use glow::HasContext;
 
 /// Draws the unlit world; with `gbuffer` (the reach lights), `program` is the G-buffer
-/// variant and the bound framebuffer's draw buffers 1–2 take the G-buffer (`gbuffer.rs`).
+/// variant and the bound framebuffer's draw buffers 1–3 take the G-buffer (`gbuffer.rs`).
 pub fn draw(ctx: &PassContext, program: &Program, gbuffer: Option<&[usize]>) {
     let gl = ctx.gl;
     // SAFETY: fixed-function state on the bound framebuffer.

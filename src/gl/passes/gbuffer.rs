@@ -1,6 +1,6 @@
 //! The G-buffer, for the exact reference: world position and normal of the visible surface at
 //! every pixel, and which stenciled lights reach it. Written by the base pass itself in frames
-//! asked for masks (`unlit.frag` with `GBUFFER`, its outputs 1–2 attached to the frame), so the
+//! asked for masks (`unlit.frag` with `GBUFFER`, its outputs 1–3 attached to the frame), so the
 //! surfaces are the frame's own and no second pass draws the world again.
 
 use super::PassContext;
@@ -14,13 +14,13 @@ pub const REACH_LIGHTS: usize = 32;
 /// Clears the G-buffer's outputs of the bound framebuffer: no surface. Draw buffer k is
 /// attachment k there ([`GBUFFER_OUTPUTS`]).
 pub fn clear(gl: &glow::Context) {
-    // SAFETY: clears of the bound framebuffer's G-buffer draw buffers (integer ones, which
-    // glClear leaves undefined): kind 0 is no surface, no reach bit set.
+    let [position, normal, reach] = GBUFFER_OUTPUTS.map(|a| a - glow::COLOR_ATTACHMENT0);
+    // SAFETY: clears of the bound framebuffer's G-buffer draw buffers (the reach target is an
+    // integer one, which glClear leaves undefined).
     unsafe {
-        for attachment in GBUFFER_OUTPUTS {
-            let draw_buffer = attachment - glow::COLOR_ATTACHMENT0;
-            gl.clear_buffer_u32_slice(glow::COLOR, draw_buffer, &[0; 4]);
-        }
+        gl.clear_buffer_f32_slice(glow::COLOR, position, &[0.0; 4]);
+        gl.clear_buffer_f32_slice(glow::COLOR, normal, &[0.0; 4]);
+        gl.clear_buffer_u32_slice(glow::COLOR, reach, &[0; 4]);
     }
 }
 

@@ -486,7 +486,7 @@ pub fn draw_reached(
     ctx: &PassContext,
     program: &Program,
     lp: &LightPlan,
-    surface: glow::Texture,
+    (position, normal): (glow::Texture, glow::Texture),
     vao: glow::VertexArray,
 ) {
     let gl = ctx.gl;
@@ -501,13 +501,16 @@ pub fn draw_reached(
     .apply(gl);
     program.bind(gl);
     set_light(ctx, program, lp);
-    program.set_i32(gl, "u_surface", 0);
-    // SAFETY: binds the G-buffer's surface texture to unit 0 and draws a full-screen triangle
+    program.set_i32(gl, "u_position", 0);
+    program.set_i32(gl, "u_normal", 1);
+    // SAFETY: binds the G-buffer's textures to units 0 and 1 and draws a full-screen triangle
     // from gl_VertexID.
     unsafe {
         gl.disable(glow::CULL_FACE);
+        gl.active_texture(glow::TEXTURE1);
+        gl.bind_texture(glow::TEXTURE_2D, Some(normal));
         gl.active_texture(glow::TEXTURE0);
-        gl.bind_texture(glow::TEXTURE_2D, Some(surface));
+        gl.bind_texture(glow::TEXTURE_2D, Some(position));
         gl.bind_vertex_array(Some(vao));
         gl.draw_arrays(glow::TRIANGLES, 0, 3);
         gl.bind_vertex_array(None);

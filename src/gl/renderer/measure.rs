@@ -330,7 +330,7 @@ pub(super) fn gtarget_bind(gl: &glow::Context, t: &GBufferTarget) {
 }
 
 pub(super) fn read_gbuffer(gl: &glow::Context, t: &GBufferTarget) -> GBuffer {
-    let (position, normal, kind) = GBufferTarget::fields(&t.read(gl));
+    let (position, normal, kind) = GBufferTarget::fields(&t.read(gl, 0), &t.read(gl, 1));
     GBuffer {
         width: t.width,
         height: t.height,

@@ -138,7 +138,7 @@ impl<'a> FrameRun<'a> {
                 &self.ctx,
                 &self.programs.record_reach,
                 lp,
-                gtarget.surface(),
+                gtarget.textures(),
                 self.empty_vao,
             );
         }
