@@ -1,6 +1,6 @@
 //! A mask's receiver pixels in tile order, the order the sampled reference's strata follow:
-//! 16×16 tiles left to right and top to bottom, each row by row. Counted per tile, so that
-//! the k-th receiver is found without listing them all: a light's mask holds up to a frame's
+//! 16×16 tiles left to right and top to bottom, each row by row. Counted per row of a tile,
+//! so that the k-th receiver is found without listing them all: a light's mask holds up to a frame's
 //! pixels while a sample picks a few hundred of them.
 
 use crate::images::{Mask, MaskValue};
@@ -8,12 +8,13 @@ use crate::images::{Mask, MaskValue};
 /// Side of the square tiles.
 pub const TILE: usize = 16;
 
+/// A mask's receivers counted in tile order.
 pub struct TileOrder<'a> {
     mask: &'a Mask,
     /// Each tile's row holding receivers, in tile order: its first pixel (row-major index),
     /// its last pixel plus one, and the receivers before it.
     runs: Vec<(usize, usize, usize)>,
-    len: usize,
+    receivers: usize,
 }
 
 /// How many of `run`'s pixels are receivers (not 0), sixteen at a time where it can.
@@ -41,7 +42,7 @@ fn receivers_in(run: &[u8]) -> usize {
 impl<'a> TileOrder<'a> {
     pub fn of(mask: &'a Mask) -> TileOrder<'a> {
         let (w, h) = (mask.width as usize, mask.height as usize);
-        let (mut runs, mut len) = (Vec::new(), 0);
+        let (mut runs, mut receivers) = (Vec::new(), 0);
         for ty in (0..h).step_by(TILE) {
             let rows = ty..(ty + TILE).min(h);
             // Most of a light's mask is no receiver (its scissor, its range): a band of
@@ -54,18 +55,22 @@ impl<'a> TileOrder<'a> {
                     let (start, end) = (y * w + tx, y * w + (tx + TILE).min(w));
                     let count = receivers_in(&mask.values[start..end]);
                     if count > 0 {
-                        runs.push((start, end, len));
-                        len += count;
+                        runs.push((start, end, receivers));
+                        receivers += count;
                     }
                 }
             }
         }
-        TileOrder { mask, runs, len }
+        TileOrder {
+            mask,
+            runs,
+            receivers,
+        }
     }
 
     /// How many receivers the mask holds.
     pub fn receivers(&self) -> usize {
-        self.len
+        self.receivers
     }
 
     /// The `k`-th receiver's pixel (row-major index); None past the last.
