@@ -121,3 +121,28 @@ fn the_planner_keeps_lights_that_reach_a_receiver_over_leaves_outside_the_pvs() 
         assert_eq!(p["conservative_beyond_edge_band"], 0, "{p}");
     }
 }
+
+/// oa_koth2's volumes err 0.131% from its first spawn, above the 0.1% volumes are held to:
+/// light 29 shadows 5.4% of its receivers falsely, and shadow maps drawing the same casters
+/// solid (`shadow_map.alpha_casters=ignore`) err there the same way. The pixels are holes of
+/// alpha-tested casters, which a volume extruded from triangles cannot follow; beside them the
+/// volumes err 0.005%. A count that leaves out too little keeps the whole error.
+#[test]
+fn check_tells_the_volumes_error_in_alpha_tested_holes_from_the_rest() {
+    let data = common::openarena_data();
+    let out = shadowlab()
+        .args(["check", "--data"])
+        .arg(&data)
+        .args(["oa_koth2", "--techniques", "shadow_volume"])
+        .output()
+        .unwrap();
+    let line: serde_json::Value = serde_json::from_str(common::stdout_of(out).trim()).unwrap();
+    let runs = line["runs"].as_array().unwrap();
+    assert_eq!(runs.len(), 2, "{line}");
+    for run in runs {
+        let all = run["error_percent"].as_f64().unwrap();
+        let beside = run["error_beside_alpha_percent"].as_f64().unwrap();
+        assert!(all > 0.1, "{run}");
+        assert!(beside < 0.02, "{run}");
+    }
+}

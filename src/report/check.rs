@@ -9,8 +9,8 @@ use crate::scene::Scene;
 use crate::scene_file::{
     CameraSection, LightSource, LightsSection, LoadReport, MapSection, SceneFile,
 };
-use crate::truth::ExactMasks;
-use crate::truth::metrics::near_boundary;
+use crate::truth::metrics::{compare_where, near_boundary};
+use crate::truth::{ExactMasks, Reference};
 use serde::Serialize;
 use std::path::Path;
 use std::time::Instant;
@@ -53,6 +53,11 @@ pub struct Run {
     pub error_percent: f64,
     /// The same, leaving out the 1-pixel band around the reference's shadow boundaries.
     pub error_excl_boundary_percent: f64,
+    /// The wrong pixels whose exact answer texture alpha does not decide (the reference with
+    /// alpha-tested casters drawn solid agrees there), in percent of all receiver pixels: what
+    /// a technique built from geometry alone (volumes) can be held to; the rest of
+    /// `error_percent` lies in the holes of alpha-tested casters.
+    pub error_beside_alpha_percent: f64,
 }
 
 /// Pixels whose decision the planner changed (masks with it on against off).
@@ -143,6 +148,9 @@ fn measure_runs(
 ) -> Result<(), crate::gl::RenderError> {
     renderer.load_scene(scene)?;
     let mut exact = ExactMasks::default();
+    // Only a scene with alpha-tested casters has pixels whose answer alpha decides.
+    let mut solid = has_alpha_tested_casters(scene)
+        .then(|| ExactMasks::with_reference(Reference::build_with(scene, false)));
     let request = FrameRequest {
         masks: true,
         ..FrameRequest::default()
@@ -157,6 +165,13 @@ fn measure_runs(
             let gbuffer = frame.gbuffer.as_ref().expect("masks were asked for");
             let m = exact.measure(scene, gbuffer, &frame.masks);
             let rates = m.total.rates();
+            let beside_alpha = match solid.as_mut() {
+                Some(solid) => {
+                    let s = solid.measure(scene, gbuffer, &frame.masks);
+                    errors_beside_alpha(&frame.masks, &m.exact, &s.exact)
+                }
+                None => m.total.false_shadow + m.total.false_lit,
+            };
             line.runs.push(Run {
                 technique,
                 planner,
@@ -164,6 +179,7 @@ fn measure_runs(
                 receiver_pixels: m.total.receiver_pixels,
                 error_percent: rates.total * 100.0,
                 error_excl_boundary_percent: rates.total_excl_boundary * 100.0,
+                error_beside_alpha_percent: percent(beside_alpha, m.total.receiver_pixels),
             });
             masks.push(frame.masks);
         }
@@ -181,6 +197,34 @@ fn measure_runs(
         line.planner.push(d);
     }
     Ok(())
+}
+
+fn has_alpha_tested_casters(scene: &Scene) -> bool {
+    scene
+        .materials
+        .iter()
+        .any(|m| m.visible && m.casts_shadows && m.alpha_test.is_some())
+}
+
+/// Wrong decisions of `masks` on pixels where the exact mask and the one traced with
+/// alpha-tested casters solid agree.
+fn errors_beside_alpha(masks: &[Mask], exact: &[Mask], solid: &[Mask]) -> usize {
+    masks
+        .iter()
+        .zip(exact.iter().zip(solid))
+        .map(|(m, (e, s))| {
+            let c = compare_where(m, e, |i| e.values[i] == s.values[i]);
+            c.false_shadow + c.false_lit
+        })
+        .sum()
+}
+
+fn percent(part: usize, whole: usize) -> f64 {
+    if whole == 0 {
+        0.0
+    } else {
+        100.0 * part as f64 / whole as f64
+    }
 }
 
 /// Pixels where the masks with the planner on and off disagree, in all and outside the
