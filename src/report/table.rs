@@ -148,6 +148,10 @@ pub fn bench_table(rows: &[BenchRow]) -> Table {
             "sampling ms (frame + masks + rays)".to_string(),
             Align::Right,
         ));
+        header.push((
+            "worst light on the path % (pooled, 95%)".to_string(),
+            Align::Right,
+        ));
     }
     header.extend(stages.iter().map(|s| (format!("{s} ms"), Align::Right)));
     let mut t = Table {
@@ -192,8 +196,18 @@ pub fn bench_table(rows: &[BenchRow]) -> Table {
                         "{:.1} + {:.1} + {:.1}",
                         p.frame_extra_ms, p.masks_ms, p.trace_ms
                     ));
+                    row.push(match p.lights.first() {
+                        Some(l) => format!(
+                            "{:.3} [{:.3}, {:.3}] (light {})",
+                            100.0 * l.error.value,
+                            100.0 * l.error.low,
+                            100.0 * l.error.high,
+                            l.light
+                        ),
+                        None => "–".to_string(),
+                    });
                 }
-                None => row.extend(["–".to_string(), "–".to_string()]),
+                None => row.extend(["–", "–", "–"].map(String::from)),
             }
         }
         row.extend(stages.iter().map(|st| match r.pass_ms.get(st) {

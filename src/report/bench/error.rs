@@ -12,15 +12,37 @@ use crate::plan::volume_draws::VolumeStats;
 use crate::report::estimate::{GBufferRead, gbuffer_of, render_sampled, sample_masks};
 use crate::run::{FrameRequest, RenderError};
 use crate::scene::path::PathKey;
-use crate::truth::sampled::FrameSample;
+use crate::truth::sampled::{FrameSample, LightSample, pooled};
 use crate::truth::{Counts, ExactMasks, Reference};
-use std::collections::HashMap;
+use std::collections::{BTreeMap, HashMap};
 use std::time::Instant;
 
 /// One sampled frame of a path: its index, the sample, milliseconds of masks, of tracing and
 /// of the frame itself (whose lit passes recorded its decisions), and of the plain frame drawn
 /// right after it (along a path sampled every few frames: the same motion, without masks).
 pub(super) type PathSample = (usize, FrameSample, f64, f64, f64, Option<f64>);
+
+/// Each light's sampled error pooled over the sampled frames of a path (each frame weighted by
+/// the light's receivers in it), worst first; lights with no receiver in any frame left out.
+pub(super) fn lights_on_path(frames: &[PathSample]) -> Vec<super::LightOnPath> {
+    let mut by_light: BTreeMap<usize, Vec<LightSample>> = BTreeMap::new();
+    for (_, sample, ..) in frames {
+        for l in &sample.per_light {
+            by_light.entry(l.light).or_default().push(*l);
+        }
+    }
+    let mut out: Vec<super::LightOnPath> = by_light
+        .into_iter()
+        .filter(|(_, parts)| parts.iter().any(|p| p.receivers > 0.0))
+        .map(|(light, parts)| super::LightOnPath {
+            light,
+            error: pooled(&parts),
+            frames: parts.len(),
+        })
+        .collect();
+    out.sort_by(|a, b| b.error.value.total_cmp(&a.error.value));
+    out
+}
 
 /// A configuration's error, with its first frame's sample when one was asked for.
 pub(super) type Errored = (FrameError, Option<PathSample>);

@@ -324,6 +324,20 @@ pub struct SampledPath {
     /// time, what recording each light's decision in its lit pass (`gl::record`) adds.
     #[serde(default)]
     pub frame_ms: f64,
+    /// Each light's error pooled over the sampled frames, worst first: what a target per
+    /// light (`accuracy`) is held to along the path.
+    #[serde(default)]
+    pub lights: Vec<LightOnPath>,
+}
+
+/// One light's sampled error over a path's sampled frames.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+pub struct LightOnPath {
+    pub light: usize,
+    /// Its receivers' share decided wrong, pooled over the frames, with its 95% interval.
+    pub error: Interval,
+    /// Sampled frames it was sampled in.
+    pub frames: usize,
 }
 
 impl SampledPath {
@@ -349,6 +363,7 @@ impl SampledPath {
             (true, true) => (sampled_frame_ms - frame_ms).max(0.0),
         };
         SampledPath {
+            lights: error::lights_on_path(&frames),
             samples_per_light: samples,
             max: errors.iter().copied().fold(0.0, f64::max),
             median: median(&mut errors),
@@ -1109,6 +1124,53 @@ mod tests {
             SampledPath::new(512, unpaired, (40.0, false)).frame_extra_ms,
             0.0
         );
+    }
+
+    /// A light's error along the path is pooled over its frames by its receivers: light 2 at
+    /// 1% of 300 receivers and 0% of 100 is 0.75%, above light 5 at 0.5% in both; a light with
+    /// no receivers anywhere is left out.
+    #[test]
+    fn each_lights_error_is_pooled_over_the_path_worst_first() {
+        use crate::truth::sampled::{FrameSample, LightSample};
+        let light = |light, receivers, value| LightSample {
+            light,
+            receivers,
+            samples: 100,
+            effective: 100.0,
+            exact: false,
+            error: Interval::wilson(value, 100.0, false),
+        };
+        let frame = |i, lights: Vec<LightSample>| {
+            let sample = FrameSample {
+                per_light: lights,
+                ..FrameSample::default()
+            };
+            (i, sample, 1.0, 0.5, 40.0, None)
+        };
+        let frames = vec![
+            frame(
+                0,
+                vec![
+                    light(2, 300.0, 0.01),
+                    light(5, 50.0, 0.005),
+                    light(7, 0.0, 0.0),
+                ],
+            ),
+            frame(
+                4,
+                vec![
+                    light(2, 100.0, 0.0),
+                    light(5, 50.0, 0.005),
+                    light(7, 0.0, 0.0),
+                ],
+            ),
+        ];
+        let p = SampledPath::new(512, frames, (40.0, true));
+        let got: Vec<(usize, usize)> = p.lights.iter().map(|l| (l.light, l.frames)).collect();
+        assert_eq!(got, [(2, 2), (5, 2)]);
+        assert!((p.lights[0].error.value - 0.0075).abs() < 1e-12);
+        assert!((p.lights[1].error.value - 0.005).abs() < 1e-12);
+        assert!(p.lights[0].error.low < 0.0075 && p.lights[0].error.high > 0.0075);
     }
 
     /// Ratios are taken path frame by path frame, not median over median: frames of 40, 3, 9,
