@@ -9,17 +9,20 @@ fn shadowlab() -> Command {
     Command::new(env!("CARGO_BIN_EXE_shadowlab"))
 }
 
-#[test]
-fn check_measures_oa_dm1_under_both_techniques_with_the_planner_on_and_off() {
-    let data = common::openarena_data();
+/// `shadowlab check` of one map of the OpenArena data with `args` after it: its JSON line.
+fn check_line(args: &[&str]) -> serde_json::Value {
     let out = shadowlab()
         .args(["check", "--data"])
-        .arg(&data)
-        .arg("oa_dm1")
+        .arg(common::openarena_data())
+        .args(args)
         .output()
         .unwrap();
-    let text = common::stdout_of(out);
-    let line: serde_json::Value = serde_json::from_str(text.trim()).unwrap();
+    serde_json::from_str(common::stdout_of(out).trim()).unwrap()
+}
+
+#[test]
+fn check_measures_oa_dm1_under_both_techniques_with_the_planner_on_and_off() {
+    let line = check_line(&["oa_dm1"]);
     assert_eq!(line["map"], "maps/oa_dm1.bsp");
     assert!(line.get("error").is_none(), "{line}");
     // oa_dm1's light entities were compiled away: one light above each spawn point and item.
@@ -47,14 +50,7 @@ fn check_measures_oa_dm1_under_both_techniques_with_the_planner_on_and_off() {
 /// them inside solid geometry, and volumes then got 4.8% of the receivers wrong (0.05% now).
 #[test]
 fn placed_lights_stay_out_of_solid_geometry() {
-    let data = common::openarena_data();
-    let out = shadowlab()
-        .args(["check", "--data"])
-        .arg(&data)
-        .arg("oa_bases5")
-        .output()
-        .unwrap();
-    let line: serde_json::Value = serde_json::from_str(common::stdout_of(out).trim()).unwrap();
+    let line = check_line(&["oa_bases5"]);
     let warnings = line["warnings"].as_array().unwrap();
     assert!(
         warnings
@@ -107,14 +103,7 @@ fn a_map_that_cannot_be_loaded_is_a_line_saying_why() {
 /// pixel now change none there.
 #[test]
 fn the_planner_keeps_lights_that_reach_a_receiver_over_leaves_outside_the_pvs() {
-    let data = common::openarena_data();
-    let out = shadowlab()
-        .args(["check", "--data"])
-        .arg(&data)
-        .arg("ctf_inyard")
-        .output()
-        .unwrap();
-    let line: serde_json::Value = serde_json::from_str(common::stdout_of(out).trim()).unwrap();
+    let line = check_line(&["ctf_inyard"]);
     let planner = line["planner"].as_array().unwrap();
     assert_eq!(planner.len(), 2, "{line}");
     for p in planner {
@@ -129,14 +118,7 @@ fn the_planner_keeps_lights_that_reach_a_receiver_over_leaves_outside_the_pvs() 
 /// volumes err 0.005%. A count that leaves out too little keeps the whole error.
 #[test]
 fn check_tells_the_volumes_error_in_alpha_tested_holes_from_the_rest() {
-    let data = common::openarena_data();
-    let out = shadowlab()
-        .args(["check", "--data"])
-        .arg(&data)
-        .args(["oa_koth2", "--techniques", "shadow_volume"])
-        .output()
-        .unwrap();
-    let line: serde_json::Value = serde_json::from_str(common::stdout_of(out).trim()).unwrap();
+    let line = check_line(&["oa_koth2", "--techniques", "shadow_volume"]);
     let runs = line["runs"].as_array().unwrap();
     assert_eq!(runs.len(), 2, "{line}");
     for run in runs {
