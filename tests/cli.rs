@@ -294,6 +294,31 @@ fn bench_under_the_gpu_profile_waits_for_nothing_in_a_timed_frame() {
     std::fs::remove_dir_all(&dir).ok();
 }
 
+/// A bench of `technique = auto` runs auto's learning frames first, as `render` does: its
+/// choices come from each technique's measured cost and sampled error, not from the
+/// constants, whose choices say "cost not measured yet" (the built-in scene, a still camera).
+#[test]
+fn bench_of_auto_chooses_from_measurement() {
+    let dir = temp("bench-auto");
+    let json = dir.join("x.json");
+    let out = shadowlab()
+        .args(["bench", "--sweep", "technique=auto", "--size", "320x240"])
+        .args(["--frames", "2", "--warmup", "1", "--json"])
+        .arg(&json)
+        .output()
+        .unwrap();
+    stdout_of(out);
+    let rows: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+    let choices = rows[0]["plan"]["choices"].as_array().unwrap();
+    assert!(!choices.is_empty(), "{}", rows[0]["plan"]);
+    for c in choices {
+        let c = c.as_str().unwrap();
+        assert!(c.contains(" ms ") && !c.contains("not measured"), "{c}");
+    }
+    std::fs::remove_dir_all(&dir).ok();
+}
+
 /// `bench --sweep technique=none,shadow_map` in `dir`, unsampled, at `size` with `frames`
 /// measured and `warmup` frames before each.
 fn bench_off_and_maps(dir: &Path, size: &str, frames: &str, warmup: &str) -> Command {

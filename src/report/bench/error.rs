@@ -9,8 +9,9 @@ use crate::options::Options;
 use crate::plan::PlanStats;
 use crate::plan::fallback::Fallback;
 use crate::plan::volume_draws::VolumeStats;
-use crate::report::estimate::{GBufferRead, gbuffer_of, render_sampled, sample_masks};
-use crate::run::{FrameRequest, RenderError};
+use crate::report::estimate::{GBufferRead, gbuffer_of, learn_auto, render_sampled, sample_masks};
+use crate::run::{FrameRequest, RenderError, Renderer};
+use crate::scene::Scene;
 use crate::scene::path::PathKey;
 use crate::truth::sampled::{FrameSample, LightSample, pooled};
 use crate::truth::{Counts, ExactMasks, Reference};
@@ -21,6 +22,25 @@ use std::time::Instant;
 /// of the frame itself (whose lit passes recorded its decisions), and of the plain frame drawn
 /// right after it (along a path sampled every few frames: the same motion, without masks).
 pub(super) type PathSample = (usize, FrameSample, f64, f64, f64, Option<f64>);
+
+/// `auto`'s learning frames ([`learn_auto`]) on `renderer` at the path's first frame: each
+/// technique of its lights drawn, timed and sampled, as a one-frame command does before its
+/// frame, so that the bench's frames run what `auto` chooses from measurement rather than from
+/// its constants (which, with no cost measured, chose shadow maps for every light of
+/// q3dm6ish's error frame where its timed frames then ran volumes). Nothing without `auto`.
+pub(super) fn learn_at_start(
+    renderer: &mut Renderer,
+    (scene, settings): (&mut Scene, &super::BenchSettings),
+    options: &Options,
+    reference: &Reference,
+) -> Result<(), RenderError> {
+    settings.pose(scene, 0);
+    let first = settings.camera(scene, 0);
+    let own = std::mem::replace(&mut scene.camera, first);
+    let learned = learn_auto(renderer, scene, options, Some(reference));
+    scene.camera = own;
+    learned
+}
 
 /// Each light's sampled error pooled over the sampled frames of a path (each frame weighted by
 /// the light's receivers in it), worst first; lights with no receiver in any frame left out.
@@ -59,6 +79,13 @@ pub struct View {
     /// Errors by options (their sampling budget aside), with the first frame's sample when
     /// one was taken.
     errors: HashMap<String, (FrameError, Option<PathSample>)>,
+}
+
+impl View {
+    /// The exact reference of the view's scene, built on first use.
+    pub(super) fn reference(&mut self, scene: &Scene) -> &Reference {
+        self.exact.reference(scene)
+    }
 }
 
 /// The options an error frame depends on: all but the sampling budget, which only says how
@@ -163,6 +190,13 @@ impl<'a> Bench<'a> {
         options: &Options,
     ) -> Result<Vec<PathSample>, RenderError> {
         let mut out: Vec<PathSample> = Vec::with_capacity(self.settings.frames);
+        let reference = self.view.exact.reference(&self.scene);
+        learn_at_start(
+            self.renderer,
+            (&mut self.scene, &self.settings),
+            options,
+            reference,
+        )?;
         let moving = self.settings.scene_moves(&self.scene);
         let every = self.settings.sample_every.max(1);
         for i in 0..self.settings.frames.max(1) {
@@ -201,6 +235,9 @@ impl<'a> Bench<'a> {
                 reference,
                 (i as u64, true, GBufferRead::Picks),
             )?;
+            // `auto` judges its lights again by the errors sampled along the path, as the
+            // viewer's live estimate has it do.
+            self.renderer.record_errors(&s.sample.per_light, options);
             out.push((i, s.sample, s.masks_ms, s.trace_ms, s.frame.frame_ms, None));
         }
         Ok(out)
@@ -244,6 +281,13 @@ impl<'a> Bench<'a> {
         // Frusta kept from the path's last frames are sized for another view: the first frame's
         // error is the configuration's own, not its history's.
         self.renderer.forget_kept_frusta();
+        let reference = self.view.exact.reference(&self.scene);
+        learn_at_start(
+            self.renderer,
+            (&mut self.scene, &self.settings),
+            options,
+            reference,
+        )?;
         let (c, masks_ms) = self.capture_timed(options)?;
         let sampled = if sample {
             let reference = self.view.exact.reference(&self.scene);

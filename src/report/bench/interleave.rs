@@ -101,6 +101,9 @@ impl Bench<'_> {
         for (_, o) in &timed {
             let mut r = self.renderer.sibling_with_scene(o.width, o.height, scene)?;
             prepared.push(r.prepare(scene, o)?);
+            let reference = self.view.reference(scene);
+            error::learn_at_start(&mut r, (scene, settings), o, reference)?;
+            settings.pose(scene, 0);
             for _ in 0..settings.warmup {
                 r.render_at(scene, &first, o, FrameRequest::default())?;
             }

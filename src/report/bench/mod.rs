@@ -751,6 +751,10 @@ impl<'a> Bench<'a> {
             None => None,
         };
         let (scene, settings) = (&mut self.scene, &self.settings);
+        if errored.is_none() {
+            let reference = self.view.reference(scene);
+            error::learn_at_start(self.renderer, (scene, settings), options, reference)?;
+        }
         // Sampling the path posed the scene at later frames.
         settings.pose(scene, 0);
         for _ in 0..warmup {
