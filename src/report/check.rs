@@ -9,7 +9,7 @@ use crate::scene::Scene;
 use crate::scene_file::{
     CameraSection, LightSource, LightsSection, LoadReport, MapSection, SceneFile,
 };
-use crate::truth::metrics::{compare_where, near_boundary};
+use crate::truth::metrics::{compare_where, near_boundary, ratio};
 use crate::truth::{ExactMasks, Reference};
 use serde::Serialize;
 use std::path::Path;
@@ -179,7 +179,7 @@ fn measure_runs(
                 receiver_pixels: m.total.receiver_pixels,
                 error_percent: rates.total * 100.0,
                 error_excl_boundary_percent: rates.total_excl_boundary * 100.0,
-                error_beside_alpha_percent: percent(beside_alpha, m.total.receiver_pixels),
+                error_beside_alpha_percent: 100.0 * ratio(beside_alpha, m.total.receiver_pixels),
             });
             masks.push(frame.masks);
         }
@@ -217,14 +217,6 @@ fn errors_beside_alpha(masks: &[Mask], exact: &[Mask], solid: &[Mask]) -> usize 
             c.false_shadow + c.false_lit
         })
         .sum()
-}
-
-fn percent(part: usize, whole: usize) -> f64 {
-    if whole == 0 {
-        0.0
-    } else {
-        100.0 * part as f64 / whole as f64
-    }
 }
 
 /// Pixels where the masks with the planner on and off disagree, in all and outside the
