@@ -34,6 +34,11 @@ fn temp(name: &str) -> PathBuf {
     d
 }
 
+/// The rows `bench --json` wrote to `path`.
+fn bench_rows(path: &Path) -> Vec<serde_json::Value> {
+    serde_json::from_str(&std::fs::read_to_string(path).unwrap()).unwrap()
+}
+
 /// The percentage README.md gives right after `phrase` (e.g. "(0.314% of the spot's" after
 /// "errs by a pixel along some shadow edges").
 fn readme_figure(phrase: &str) -> f64 {
@@ -282,9 +287,8 @@ fn bench_under_the_gpu_profile_waits_for_nothing_in_a_timed_frame() {
         .output()
         .unwrap();
     stdout_of(out);
-    let rows: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
-    let row = &rows.as_array().unwrap()[0];
+    let rows = bench_rows(&json);
+    let row = &rows[0];
     let syncs = &row["syncs_per_frame"];
     assert_eq!(syncs["total"].as_f64(), Some(0.0), "{syncs}");
     for key in ["frame_ms", "submit_ms"] {
@@ -308,8 +312,7 @@ fn bench_of_auto_chooses_from_measurement() {
         .output()
         .unwrap();
     stdout_of(out);
-    let rows: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+    let rows = bench_rows(&json);
     let choices = rows[0]["plan"]["choices"].as_array().unwrap();
     assert!(!choices.is_empty(), "{}", rows[0]["plan"]);
     for c in choices {
@@ -367,8 +370,7 @@ fn bench_enough_seconds_cuts_long_frames_on_a_still_camera_only() {
             c.arg("--sequential");
         }
         stdout_of(c.arg("--json").arg(&json).output().unwrap());
-        let rows: Vec<serde_json::Value> =
-            serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+        let rows = bench_rows(&json);
         assert_eq!(rows.len(), 2);
         for row in &rows {
             assert_eq!(
@@ -414,8 +416,7 @@ fn bench_gives_cpu_ms_and_frame_by_frame_ratios_to_shadows_off() {
                 "{column}: {table}"
             );
         }
-        let rows: Vec<serde_json::Value> =
-            serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+        let rows = bench_rows(&json);
         assert_eq!(rows.len(), 2);
         for row in &rows {
             let f = |v: &serde_json::Value| {
