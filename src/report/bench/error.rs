@@ -13,9 +13,9 @@ use crate::report::estimate::{GBufferRead, gbuffer_of, learn_auto, render_sample
 use crate::run::{FrameRequest, RenderError, Renderer};
 use crate::scene::Scene;
 use crate::scene::path::PathKey;
-use crate::truth::sampled::{FrameSample, LightSample, pooled};
+use crate::truth::sampled::FrameSample;
 use crate::truth::{Counts, ExactMasks, Reference};
-use std::collections::{BTreeMap, HashMap};
+use std::collections::HashMap;
 use std::time::Instant;
 
 /// One sampled frame of a path: its index, the sample, milliseconds of masks, of tracing and
@@ -40,28 +40,6 @@ pub(super) fn learn_at_start(
     let learned = learn_auto(renderer, scene, options, Some(reference));
     scene.camera = own;
     learned
-}
-
-/// Each light's sampled error pooled over the sampled frames of a path (each frame weighted by
-/// the light's receivers in it), worst first; lights with no receiver in any frame left out.
-pub(super) fn lights_on_path(frames: &[PathSample]) -> Vec<super::LightOnPath> {
-    let mut by_light: BTreeMap<usize, Vec<LightSample>> = BTreeMap::new();
-    for (_, sample, ..) in frames {
-        for l in &sample.per_light {
-            by_light.entry(l.light).or_default().push(*l);
-        }
-    }
-    let mut out: Vec<super::LightOnPath> = by_light
-        .into_iter()
-        .filter(|(_, parts)| parts.iter().any(|p| p.receivers > 0.0))
-        .map(|(light, parts)| super::LightOnPath {
-            light,
-            error: pooled(&parts),
-            frames: parts.len(),
-        })
-        .collect();
-    out.sort_by(|a, b| b.error.value.total_cmp(&a.error.value));
-    out
 }
 
 /// A configuration's error, with its first frame's sample when one was asked for.
@@ -177,6 +155,17 @@ impl<'a> Bench<'a> {
         Ok((capture, masks_ms))
     }
 
+    /// [`learn_at_start`] on this bench's renderer, against the view's reference.
+    pub(super) fn learn_auto(&mut self, options: &Options) -> Result<(), RenderError> {
+        let reference = self.view.reference(&self.scene);
+        learn_at_start(
+            self.renderer,
+            (&mut self.scene, &self.settings),
+            options,
+            reference,
+        )
+    }
+
     /// Whether every measured frame shows what the first shows: one camera, and a scene that
     /// stands (or is held). Sampling such frames again would draw the same masks.
     pub(super) fn path_is_still(&self) -> bool {
@@ -190,13 +179,7 @@ impl<'a> Bench<'a> {
         options: &Options,
     ) -> Result<Vec<PathSample>, RenderError> {
         let mut out: Vec<PathSample> = Vec::with_capacity(self.settings.frames);
-        let reference = self.view.exact.reference(&self.scene);
-        learn_at_start(
-            self.renderer,
-            (&mut self.scene, &self.settings),
-            options,
-            reference,
-        )?;
+        self.learn_auto(options)?;
         let moving = self.settings.scene_moves(&self.scene);
         let every = self.settings.sample_every.max(1);
         for i in 0..self.settings.frames.max(1) {
@@ -281,13 +264,7 @@ impl<'a> Bench<'a> {
         // Frusta kept from the path's last frames are sized for another view: the first frame's
         // error is the configuration's own, not its history's.
         self.renderer.forget_kept_frusta();
-        let reference = self.view.exact.reference(&self.scene);
-        learn_at_start(
-            self.renderer,
-            (&mut self.scene, &self.settings),
-            options,
-            reference,
-        )?;
+        self.learn_auto(options)?;
         let (c, masks_ms) = self.capture_timed(options)?;
         let sampled = if sample {
             let reference = self.view.exact.reference(&self.scene);
