@@ -165,6 +165,55 @@ mod tests {
         }
     }
 
+    /// The receiver cull leaves out the half of a floor whose shadow reaches no receiver,
+    /// and a wall beside it; the half comes back (a silhouette edge across the floor would
+    /// close the kept half with a side quad rising from the floor itself, which ties with it
+    /// in the depth test), the wall, on another plane, stays out. Made to fail by keeping
+    /// nothing back: 4 culled, 4 quads (the floor's kept half closed along x = 100).
+    #[test]
+    fn the_receiver_cull_splits_no_flat_surface() {
+        let p = |x: f32, y: f32, z: f32| Vec3::new(x, y, z);
+        let quad = |a: Vec3, b: Vec3, c: Vec3, d: Vec3| [[a, b, c], [a, c, d]];
+        let mut triangles = Vec::new();
+        // Two floor halves facing up (x 0..100 and 100..200), and a wall at x = 200 facing -x.
+        triangles.extend(quad(
+            p(0., 0., 0.),
+            p(100., 0., 0.),
+            p(100., 100., 0.),
+            p(0., 100., 0.),
+        ));
+        triangles.extend(quad(
+            p(100., 0., 0.),
+            p(200., 0., 0.),
+            p(200., 100., 0.),
+            p(100., 100., 0.),
+        ));
+        triangles.extend(quad(
+            p(200., 0., 0.),
+            p(200., 0., 50.),
+            p(200., 100., 50.),
+            p(200., 100., 0.),
+        ));
+        let g = CasterGroup::build(SurfaceOwner::World, triangles);
+        assert_eq!(g.components.len(), 1);
+        // Receivers under the first half only: the second half's shadow falls past x = 105.
+        let boxes = [crate::geometry::Aabb {
+            min: p(0., 0., -50.),
+            max: p(100., 100., -10.),
+        }];
+        let cull = ReceiverCull {
+            boxes: &boxes,
+            radius: 1000.0,
+            truncate: false,
+        };
+        let light = DVec3::new(50.0, 50.0, 100.0);
+        let s = settings(EdgeRule::Paper);
+        let v = build_volume_of(&g, &g.components[0], light, &s, false, Some(cull));
+        assert_eq!((v.culled, v.facing), (2, 4), "the wall alone left out");
+        // The floor's outline: two edges along y = 0, two along y = 100, x = 0 and x = 200.
+        assert_eq!(v.quads, 6);
+    }
+
     #[test]
     fn a_cube_under_a_light_above_has_a_four_edge_silhouette() {
         let g = CasterGroup::build(

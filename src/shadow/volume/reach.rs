@@ -151,7 +151,7 @@ pub(super) fn cull_to_receivers(
         .iter()
         .filter(|b| b.intersects(&piece_shadow))
         .collect();
-    let mut culled = 0;
+    let mut culled = Vec::new();
     let mut scale = 1.0f64;
     for &t in &comp.triangles {
         if !facing[t as usize] {
@@ -160,7 +160,7 @@ pub(super) fn cull_to_receivers(
         match shadow_reach(c, t as usize, l, rc.radius, &near) {
             None => {
                 facing[t as usize] = false;
-                culled += 1;
+                culled.push(t);
             }
             Some(reach) if rc.truncate => scale = scale.max(reach),
             Some(_) => scale = f64::INFINITY,
@@ -169,5 +169,59 @@ pub(super) fn cull_to_receivers(
     if !rc.truncate {
         scale = f64::INFINITY;
     }
-    (culled, scale)
+    let restored = keep_coplanar_neighbours(c, comp, &culled, facing);
+    (culled.len() - restored, scale)
+}
+
+/// Gives back to `facing` the culled triangles joined to a kept one through coplanar
+/// neighbours: a cull that splits a flat surface adds a silhouette edge on it, whose side quad
+/// rises from the surface itself and ties with it in the depth test along the pixels whose
+/// centres lie on that edge (oa_dm3's ceiling at y = 256: 16 pixels shadowed that no cull
+/// shadows). A culled triangle's shadow reaches no receiver, so keeping it changes no other
+/// pixel. Returns how many came back.
+fn keep_coplanar_neighbours(
+    c: &Connectivity,
+    comp: &Component,
+    culled: &[u32],
+    facing: &mut [bool],
+) -> usize {
+    if culled.is_empty() {
+        return 0;
+    }
+    let coplanar = |a: u32, b: u32| {
+        let (p, q) = (&c.planes[a as usize], &c.planes[b as usize]);
+        p.normal.dot(q.normal) > 1.0 - 1e-9 && (p.d - q.d).abs() < 1e-3
+    };
+    let is_culled: std::collections::HashSet<u32> = culled.iter().copied().collect();
+    // The component's edges by triangle, for the culled ones.
+    let mut edges_of: std::collections::HashMap<u32, Vec<u32>> = std::collections::HashMap::new();
+    let mut work: Vec<u32> = Vec::new();
+    for &e in &comp.edges {
+        let on = c.triangles_of(&c.edges[e as usize]);
+        for &t in on.iter().filter(|t| is_culled.contains(t)) {
+            edges_of.entry(t).or_default().push(e);
+        }
+        for &kept in on.iter().filter(|t| facing[**t as usize]) {
+            work.extend(
+                on.iter()
+                    .filter(|&&t| is_culled.contains(&t) && coplanar(kept, t)),
+            );
+        }
+    }
+    let mut restored = 0;
+    while let Some(t) = work.pop() {
+        if facing[t as usize] {
+            continue;
+        }
+        facing[t as usize] = true;
+        restored += 1;
+        for &e in edges_of.get(&t).map_or(&[][..], Vec::as_slice) {
+            let on = c.triangles_of(&c.edges[e as usize]);
+            work.extend(
+                on.iter()
+                    .filter(|&&n| !facing[n as usize] && is_culled.contains(&n) && coplanar(t, n)),
+            );
+        }
+    }
+    restored
 }
