@@ -322,6 +322,62 @@ fn bench_of_auto_chooses_from_measurement() {
     std::fs::remove_dir_all(&dir).ok();
 }
 
+/// Along a path, `auto` goes on learning from the errors sampled every few frames, and the
+/// bench's timed frames run what it chose there: the row's time and its error are of the same
+/// choices. q3dm6ish's light 10, out of view at the path's first frame, shows 5-7% false
+/// shadow under shadow maps from its frame 340 on; sampled frame by frame, `auto` moves it to
+/// volumes at the next frame. Made to fail twice: with the timed frames judging for
+/// themselves (they sample nothing, so they kept maps: the row ran no volumes while its
+/// sampled path did), and with a frame timed whole not saying what ran (light 10, unplanned
+/// at the first frame, had its errors dropped and ran nothing on record: 5.1% pooled).
+#[test]
+fn bench_times_the_choices_auto_made_on_its_sampled_path() {
+    common::openarena_data();
+    let dir = temp("bench-auto-follows");
+    let path = dir.join("q3dm6ish-340.path");
+    // Frames 0, 340 and 344 (twice) of assets/paths/q3dm6ish.path.
+    let poses = [
+        "272 -528 26 48 -4",
+        "-41.248642 321.62515 -174 281.24078 -7.7088246",
+        "-57.320946 274.31427 -174 263.73517 -7.014392",
+        "-57.320946 274.31427 -174 263.73517 -7.014392",
+    ];
+    std::fs::write(&path, poses.join("\n") + "\n").unwrap();
+    let json = dir.join("x.json");
+    let out = shadowlab()
+        .current_dir(env!("CARGO_MANIFEST_DIR"))
+        .args(["bench", "--scene", "assets/scenes/q3dm6ish.toml"])
+        .args([
+            "--set",
+            "technique=auto",
+            "--no-motion",
+            "--sample-every",
+            "1",
+        ])
+        .args(["--warmup", "1", "--path"])
+        .arg(&path)
+        .arg("--json")
+        .arg(&json)
+        .output()
+        .unwrap();
+    stdout_of(out);
+    let rows = bench_rows(&json);
+    let (timed, sampled) = (&rows[0]["ran"], &rows[0]["sampled"]["ran"]);
+    assert_eq!(
+        timed, sampled,
+        "timed frames ran {timed}, the sampled path {sampled}"
+    );
+    let light10 = rows[0]["sampled"]["lights"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .find(|l| l["light"] == 10)
+        .expect("light 10 sampled");
+    let volumes = light10["ran"]["shadow_volume"].as_u64().unwrap_or(0);
+    assert!(volumes > 0, "light 10 never moved to volumes: {light10}");
+    std::fs::remove_dir_all(&dir).ok();
+}
+
 /// `bench --sweep technique=none,shadow_map` in `dir`, unsampled, at `size` with `frames`
 /// measured and `warmup` frames before each.
 fn bench_off_and_maps(dir: &Path, size: &str, frames: &str, warmup: &str) -> Command {

@@ -99,8 +99,10 @@ impl Planner {
         self.memory.set_cost_source(source);
     }
 
-    /// Learns from a frame's pass times, for `technique = auto`.
-    pub fn record_costs(&mut self, plan: &Plan, passes: &[PassTime]) {
+    /// Notes what each light of a frame ran with, and learns from the frame's pass times
+    /// where it was timed pass by pass (`passes`), for `technique = auto`. A frame timed whole
+    /// (bench's) still says what ran: the errors sampled from it are that candidate's.
+    pub fn record_frame(&mut self, plan: &Plan, passes: Option<&[PassTime]>) {
         self.ran = plan
             .lights
             .iter()
@@ -113,7 +115,20 @@ impl Planner {
                 (l.light, candidate)
             })
             .collect();
-        self.memory.record(passes, &self.ran);
+        match passes {
+            Some(passes) => self.memory.record(passes, &self.ran),
+            None => self.memory.note_ran(&self.ran),
+        }
+    }
+
+    /// Each planned light of the last frame and the candidate it ran with.
+    pub fn ran(&self) -> &[(usize, Candidate)] {
+        &self.ran
+    }
+
+    /// Dictates `auto`'s choices for the next frames ([`AutoMemory::follow`]).
+    pub fn follow(&mut self, choices: &[(usize, Candidate)]) {
+        self.memory.follow(choices);
     }
 
     /// Learns from the last frame's sampled errors, for `technique = auto`.
@@ -151,6 +166,7 @@ impl Planner {
 
     /// The plan for `camera`, with the costs measured so far.
     pub fn plan(&mut self, scene: &Scene, camera: &Camera, options: &Options) -> Plan {
+        self.memory.note_view(camera);
         let groups = Plan::needs_casters(scene, options).then(|| self.casters(scene));
         let plan = Plan::build_with(
             scene,
@@ -336,5 +352,43 @@ impl Planner {
     /// The light's volume draws as last prepared.
     pub fn last_volume_draws(&self, light: usize) -> Option<&LightVolumeDraws> {
         self.volumes.get(light)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::options::Technique;
+    use crate::truth::sampled::{Interval, LightSample};
+
+    /// A frame timed whole (bench's timed frames: no pass times) still says what each light
+    /// ran, so that the errors sampled from it count for that candidate. Before, such a frame
+    /// left the last timed frame's list: a light planned in none of those (q3dm6ish's light
+    /// 10, out of view at the path's first frame) had its errors dropped, and kept the
+    /// candidate its constants chose along the whole path.
+    #[test]
+    fn a_frame_timed_whole_still_says_what_ran() {
+        let scene = crate::scene::builtin::default_scene();
+        let options = Options {
+            technique: Technique::ShadowVolume,
+            ..Options::default()
+        };
+        let mut planner = Planner::default();
+        let plan = planner.plan(&scene, &scene.camera, &options);
+        let light = plan.lights.first().expect("a planned light").light;
+        planner.record_frame(&plan, None);
+        let sample = LightSample {
+            light,
+            receivers: 1000.0,
+            samples: 512,
+            effective: 512.0,
+            exact: false,
+            error: Interval::wilson(0.0, 512.0, false),
+        };
+        planner.record_errors(&[sample], &options);
+        let volumes = Candidate::of(Technique::ShadowVolume, &options);
+        assert!(planner.memory().error(light, volumes, &options).is_some());
+        assert_eq!(planner.memory().last(light), Some(volumes));
+        assert!(!planner.memory().warm(light, volumes), "no cost learnt");
     }
 }

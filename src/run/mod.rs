@@ -269,9 +269,8 @@ impl Renderer {
         frame.fallbacks = fallbacks;
         frame.cache.caster_groups_built = self.planner.take_groups_rebuilt();
         // Frame-only timing has no per-light passes to learn from.
-        if !request.frame_only {
-            self.planner.record_costs(&plan, &frame.passes);
-        }
+        let passes = (!request.frame_only).then_some(frame.passes.as_slice());
+        self.planner.record_frame(&plan, passes);
         frame.syncs = syncs::counted().since(&before);
         Ok(frame)
     }
@@ -371,6 +370,18 @@ impl Renderer {
     /// GL layer measures no error itself.
     pub fn record_errors(&mut self, samples: &[LightSample], options: &Options) {
         self.planner.record_errors(samples, options);
+    }
+
+    /// Each light the last frame planned and the candidate (technique, buffer, size) it ran
+    /// with.
+    pub fn ran(&self) -> &[(usize, crate::options::Candidate)] {
+        self.planner.ran()
+    }
+
+    /// Makes `choices` what `technique = auto` runs its lights with from the next frame on,
+    /// in place of judging them (empty: it judges them again).
+    pub fn follow(&mut self, choices: &[(usize, crate::options::Candidate)]) {
+        self.planner.follow(choices);
     }
 
     /// How many depth images the last frame made for `light`: 1 for a spot, 6 for an omni

@@ -1,6 +1,7 @@
 //! A configuration's error: the path's first frame drawn with its masks and compared with the
 //! exact reference, and the sampled reference along the path.
 
+use super::follow::Choices;
 use super::{Bench, models_key, options_key};
 use crate::frame::CacheStats;
 use crate::frame::Frame;
@@ -173,22 +174,29 @@ impl<'a> Bench<'a> {
     }
 
     /// Every measured frame of the path with `options`, its masks drawn (untimed) and sampled:
-    /// the error along the path and, per frame, milliseconds of masks and of tracing.
+    /// the error along the path and, per frame, milliseconds of masks and of tracing; and
+    /// what each light ran with at every frame of the path (`auto`'s choices).
     pub(super) fn sample_path(
         &mut self,
         options: &Options,
-    ) -> Result<Vec<PathSample>, RenderError> {
+    ) -> Result<(Vec<PathSample>, Choices), RenderError> {
         let mut out: Vec<PathSample> = Vec::with_capacity(self.settings.frames);
+        let mut choices: Choices = Vec::with_capacity(self.settings.frames);
         self.learn_auto(options)?;
         let moving = self.settings.scene_moves(&self.scene);
         let every = self.settings.sample_every.max(1);
+        let auto = options.uses(self.scene.lights.len(), crate::options::Technique::Auto);
         for i in 0..self.settings.frames.max(1) {
             self.settings.pose(&mut self.scene, i);
             if i % every != 0 {
                 // The frames between samples are drawn too, plain: every frame then moves
                 // one step from the last, as the timed ones do, and the one after a sampled
-                // frame is what that frame costs without sampling, at the same moment.
-                let plain_ms = self.plain_frame_ms(options, i)?;
+                // frame is what that frame costs without sampling, at the same moment. The
+                // others are timed pass by pass under `auto`, which learns each light's costs
+                // from them as the path goes, as it does in the viewer.
+                let passes = auto && i % every > 1;
+                let plain_ms = self.plain_frame_ms(options, i, passes)?;
+                choices.push(self.renderer.ran().to_vec());
                 if let Some(last) = out.last_mut().filter(|l| l.0 + 1 == i) {
                     last.5 = Some(plain_ms);
                 }
@@ -221,16 +229,23 @@ impl<'a> Bench<'a> {
             // `auto` judges its lights again by the errors sampled along the path, as the
             // viewer's live estimate has it do.
             self.renderer.record_errors(&s.sample.per_light, options);
+            choices.push(self.renderer.ran().to_vec());
             out.push((i, s.sample, s.masks_ms, s.trace_ms, s.frame.frame_ms, None));
         }
-        Ok(out)
+        Ok((out, choices))
     }
 
-    /// Path frame `i` drawn without masks (the scene posed for it): its frame time.
-    fn plain_frame_ms(&mut self, options: &Options, i: usize) -> Result<f64, RenderError> {
+    /// Path frame `i` drawn without masks (the scene posed for it), timed pass by pass with
+    /// `passes`: its frame time.
+    fn plain_frame_ms(
+        &mut self,
+        options: &Options,
+        i: usize,
+        passes: bool,
+    ) -> Result<f64, RenderError> {
         let camera = self.settings.camera(&self.scene, i);
         let request = FrameRequest {
-            frame_only: true,
+            frame_only: !passes,
             ..FrameRequest::default()
         };
         let frame = self

@@ -93,17 +93,20 @@ impl Bench<'_> {
         timed: Vec<(String, Options)>,
         group: usize,
     ) -> Result<HashMap<String, Measured>, RenderError> {
-        let (scene, settings) = (&mut self.scene, &self.settings);
+        let (scene, settings, choices) = (&mut self.scene, &self.settings, &self.choices);
         let mut renderers = Vec::with_capacity(timed.len());
         let mut prepared = Vec::with_capacity(timed.len());
-        settings.pose(scene, 0);
-        let first = settings.camera(scene, 0);
-        for (_, o) in &timed {
+        for (key, o) in &timed {
             let mut r = self.renderer.sibling_with_scene(o.width, o.height, scene)?;
-            prepared.push(r.prepare(scene, o)?);
-            let reference = self.view.reference(scene);
-            error::learn_at_start(&mut r, (scene, settings), o, reference)?;
             settings.pose(scene, 0);
+            prepared.push(r.prepare(scene, o)?);
+            // Frames that follow a sampled run's choices need no teaching.
+            let follows = choices.get(key);
+            if follows.is_none() {
+                let reference = self.view.reference(scene);
+                error::learn_at_start(&mut r, (scene, settings), o, reference)?;
+            }
+            let first = settings.frame(scene, (&mut r, follows), 0);
             for _ in 0..settings.warmup {
                 r.render_at(scene, &first, o, FrameRequest::default())?;
             }
@@ -111,15 +114,15 @@ impl Bench<'_> {
         }
         let mut frames: Vec<Vec<Timed>> = timed.iter().map(|_| Vec::new()).collect();
         for i in 0..settings.frames.max(1) {
-            // Every configuration draws the same posed frame.
-            settings.pose(scene, i);
-            let camera = settings.camera(scene, i);
             for k in 0..timed.len() {
                 let j = (k + i) % timed.len();
                 let ms: f64 = frames[j].iter().map(|t| t.ms).sum();
                 if settings.enough(scene, frames[j].len(), ms) {
                     continue;
                 }
+                // Every configuration draws the same posed frame.
+                let follows = (&mut renderers[j], choices.get(&timed[j].0));
+                let camera = settings.frame(scene, follows, i);
                 frames[j].push(time_frame(&mut renderers[j], scene, &camera, &timed[j].1)?);
             }
         }
@@ -130,7 +133,7 @@ impl Bench<'_> {
             .zip(&frames)
             .zip(prepared)
         {
-            let mut m = pass_breakdown(r, scene, settings, &o, f)?;
+            let mut m = pass_breakdown((r, choices.get(&key)), scene, settings, &o, f)?;
             m.prepared = p;
             m.held_bytes = r.held().bytes();
             m.group = Some(group);

@@ -25,6 +25,7 @@ use std::collections::{BTreeMap, HashMap};
 use std::time::Instant;
 
 mod error;
+mod follow;
 mod interleave;
 mod kept;
 mod sampled;
@@ -286,6 +287,11 @@ pub struct BenchRow {
     /// The sampled reference on every measured frame of the path (None with shadows off or
     /// `estimate.samples = 0`).
     pub sampled: Option<SampledPath>,
+    /// What the lights ran with in the timed frames, in light-frames (a light planned in a
+    /// frame is one) by candidate (`shadow_volume`, `shadow_map@1024`, ...): under `auto`,
+    /// how often it chose each.
+    #[serde(default)]
+    pub ran: BTreeMap<String, usize>,
 }
 
 /// Sums per-light passes into `lights.<stage>` entries, next to the passes themselves.
@@ -321,6 +327,8 @@ struct Measured {
     held_bytes: u64,
     /// The round-robin group it was timed in.
     group: Option<usize>,
+    /// Light-frames by what the light ran with ([`follow::light_frames`]).
+    ran: BTreeMap<String, usize>,
 }
 
 /// Where the timed frames waited for the GPU ([`Syncs`]), per frame on average.
@@ -437,6 +445,8 @@ struct Timed {
     own_ms: f64,
     cache: CacheStats,
     syncs: Syncs,
+    /// What each planned light ran with.
+    ran: Vec<(usize, crate::options::Candidate)>,
 }
 
 /// What a timed frame asks for: no per-pass timing (it would serialise llvmpipe's pipeline,
@@ -475,6 +485,7 @@ fn time_frame(
         own_ms: f.own_ms,
         cache: f.cache,
         syncs: f.syncs,
+        ran: renderer.ran().to_vec(),
     })
 }
 
@@ -482,7 +493,7 @@ fn time_frame(
 /// after each frame is sent, bench waits only for the one before it. Throughput, where the
 /// latency of `time_frame` serialises the CPU's planning with the GL's drawing.
 fn pipelined_ms(
-    renderer: &mut Renderer,
+    (renderer, choices): (&mut Renderer, Option<&follow::Choices>),
     scene: &mut Scene,
     settings: &BenchSettings,
     options: &Options,
@@ -492,8 +503,7 @@ fn pipelined_ms(
     let start = Instant::now();
     let mut in_flight: Option<crate::gl::syncs::Fence> = None;
     for i in 0..frames {
-        settings.pose(scene, i);
-        let camera = settings.camera(scene, i);
+        let camera = settings.frame(scene, (renderer, choices), i);
         renderer.render_at(scene, &camera, options, TIMED)?;
         let fence = renderer.fence()?;
         if let Some(before) = in_flight.replace(fence) {
@@ -508,9 +518,10 @@ fn pipelined_ms(
     Ok(start.elapsed().as_secs_f64() * 1e3 / frames as f64)
 }
 
-/// `frame_ms` with a few frames timed pass by pass for the breakdown.
+/// `frame_ms` with a few frames timed pass by pass for the breakdown; with `choices`, `auto`
+/// runs what a sampled run of the path chose ([`follow`]).
 fn pass_breakdown(
-    renderer: &mut Renderer,
+    (renderer, choices): (&mut Renderer, Option<&follow::Choices>),
     scene: &mut Scene,
     settings: &BenchSettings,
     options: &Options,
@@ -526,7 +537,7 @@ fn pass_breakdown(
         submit_ms: timed.iter().map(|t| t.submit_ms).collect(),
         own_ms: timed.iter().map(|t| t.own_ms).collect(),
         pipelined_ms: if settings.pipelined && timed.len() > 1 {
-            pipelined_ms(renderer, scene, settings, options, timed.len())?
+            pipelined_ms((renderer, choices), scene, settings, options, timed.len())?
         } else {
             0.0
         },
@@ -537,6 +548,7 @@ fn pass_breakdown(
         prepared: Prepared::default(),
         held_bytes: 0,
         group: None,
+        ran: follow::light_frames(timed.iter().flat_map(|t| &t.ran)),
     };
     let frames = if settings.breakdown {
         timed.len().clamp(1, PASS_FRAMES)
@@ -544,8 +556,7 @@ fn pass_breakdown(
         0
     };
     for i in 0..frames {
-        settings.pose(scene, i);
-        let camera = settings.camera(scene, i);
+        let camera = settings.frame(scene, (renderer, choices), i);
         let f = renderer.render_at(scene, &camera, options, FrameRequest::default())?;
         for (name, ms) in pass_totals(&f) {
             m.passes.entry(name).or_default().push(ms);
@@ -581,6 +592,9 @@ pub struct Bench<'a> {
     held: HashMap<String, u64>,
     /// Error frames drawn (those the view held are not).
     error_frames: usize,
+    /// `auto`'s choices on each sampled path drawn ahead of the timing, by options: what
+    /// the timed frames of those options run ([`follow`]).
+    choices: HashMap<String, follow::Choices>,
 }
 
 /// Where every model stands (its transform's bits) and in which pose.
@@ -609,6 +623,7 @@ impl<'a> Bench<'a> {
             fingerprint: String::new(),
             held: HashMap::new(),
             error_frames: 0,
+            choices: HashMap::new(),
         }
     }
 
@@ -649,18 +664,19 @@ impl<'a> Bench<'a> {
             Some(sample) => Some(self.error(options, sample)?),
             None => None,
         };
+        let key = options_key(options);
         // An error frame drawn now taught `auto` on this renderer first; one taken from the
-        // view did not.
-        if !drew_error {
+        // view did not. Frames that follow a sampled run's choices need no teaching.
+        if !drew_error && !self.choices.contains_key(&key) {
             self.learn_auto(options)?;
         }
+        let choices = self.choices.get(&key);
         let (scene, settings) = (&mut self.scene, &self.settings);
-        // Sampling the path posed the scene at later frames.
-        settings.pose(scene, 0);
+        let renderer = &mut *self.renderer;
         for _ in 0..warmup {
-            let camera = settings.camera(scene, 0);
-            self.renderer
-                .render_at(scene, &camera, options, FrameRequest::default())?;
+            // Sampling the path posed the scene at later frames.
+            let camera = settings.frame(scene, (renderer, choices), 0);
+            renderer.render_at(scene, &camera, options, FrameRequest::default())?;
         }
         let mut timed: Vec<Timed> = Vec::new();
         let mut ms = 0.0;
@@ -668,13 +684,13 @@ impl<'a> Bench<'a> {
             if settings.enough(scene, i, ms) {
                 break;
             }
-            settings.pose(scene, i);
-            let camera = settings.camera(scene, i);
-            let t = time_frame(self.renderer, scene, &camera, options)?;
+            let camera = settings.frame(scene, (renderer, choices), i);
+            let t = time_frame(renderer, scene, &camera, options)?;
             ms += t.ms;
             timed.push(t);
         }
-        let mut m = pass_breakdown(self.renderer, scene, settings, options, &timed)?;
+        let mut m = pass_breakdown((renderer, choices), scene, settings, options, &timed)?;
+        renderer.follow(&[]);
         m.prepared = prepared;
         m.held_bytes = self.renderer.held().bytes();
         self.held.insert(error::error_key(options), m.held_bytes);
@@ -802,6 +818,7 @@ impl<'a> Bench<'a> {
         bar: &ProgressBar,
     ) -> Result<Vec<BenchRow>, RenderError> {
         let mut rows = Vec::with_capacity(configs.len());
+        let mut sampled_ahead = self.sample_ahead(configs, bar)?;
         let interleaved = if self.settings.interleave {
             self.measure_interleaved(configs, bar)?
         } else {
@@ -834,18 +851,22 @@ impl<'a> Bench<'a> {
             let frame_ms = stats(&m.frame_ms);
             let sampled = if sample {
                 let along_path = first_sample.is_none();
-                let frames = match first_sample {
-                    Some(first) => vec![first],
-                    None => {
+                let ahead = sampled_ahead.remove(&options_key(&c.options));
+                let (frames, choices) = match (first_sample, ahead) {
+                    (Some(first), _) => (vec![first], Vec::new()),
+                    (None, Some(ahead)) => ahead,
+                    (None, None) => {
                         bar.set_message(format!("{}: sampled reference along the path", c.label()));
                         self.sample_path(&c.options)?
                     }
                 };
-                Some(SampledPath::new(
+                let mut path = SampledPath::new(
                     c.options.estimate.samples,
                     frames,
                     (frame_ms.median, along_path),
-                ))
+                );
+                path.count_choices(&choices);
+                Some(path)
             } else {
                 None
             };
@@ -905,6 +926,7 @@ impl<'a> Bench<'a> {
                 syncs_per_frame: m.syncs,
                 fallbacks,
                 sampled,
+                ran: m.ran,
             });
             self.store
                 .put(key, rows.last().expect("the row just measured"));
@@ -957,6 +979,7 @@ pub(crate) fn test_row(technique: &str, label: &str, ms: f64, error: f64) -> Ben
         },
         error_per_light: Vec::new(),
         sampled: None,
+        ran: BTreeMap::new(),
         volumes: Vec::new(),
         plan: Default::default(),
         cache: Default::default(),

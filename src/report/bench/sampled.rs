@@ -48,6 +48,10 @@ pub struct SampledPath {
     /// light (`accuracy`) is held to along the path.
     #[serde(default)]
     pub lights: Vec<LightOnPath>,
+    /// What the lights ran with along the path, every frame (sampled or plain) counted, in
+    /// light-frames by candidate (as the row's `ran` counts its timed frames).
+    #[serde(default)]
+    pub ran: BTreeMap<String, usize>,
 }
 
 /// One light's sampled error over a path's sampled frames.
@@ -58,6 +62,10 @@ pub struct LightOnPath {
     pub error: Interval,
     /// Sampled frames it was sampled in.
     pub frames: usize,
+    /// Frames of the path (sampled or plain) it was planned in, by what it ran with: under
+    /// `auto`, when it chose what.
+    #[serde(default)]
+    pub ran: BTreeMap<String, usize>,
 }
 
 impl SampledPath {
@@ -104,6 +112,7 @@ impl SampledPath {
                 0.0
             },
             frame_ms: sampled_frame_ms,
+            ran: BTreeMap::new(),
         }
     }
 }
@@ -124,6 +133,7 @@ fn lights_on_path(frames: &[PathSample]) -> Vec<LightOnPath> {
             light,
             error: pooled(&parts),
             frames: parts.len(),
+            ran: BTreeMap::new(),
         })
         .collect();
     out.sort_by(|a, b| b.error.value.total_cmp(&a.error.value));
