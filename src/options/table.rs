@@ -552,6 +552,13 @@ define_options! {
         /// Forsyth's fix for chopped Gouraud shading: a triangle faces the light when N.L > -eps
         /// (with `casters = front`; two-sided casting casts every triangle either way).
         facing_epsilon: f32 = 0.0, in 0.0 ..= 1.0;
+        /// Where `plan.cull_casters` leaves out a piece's facing triangles whose shadow reaches
+        /// no receiver, keep a flat surface whole: a triangle joined to a kept one through
+        /// coplanar neighbours stays. Off, the cull can split a surface, and the side quad that
+        /// closes the kept part rises from the surface itself and ties with it in the depth
+        /// test along the pixels whose centres lie on the split (oa_dm3: 28 pixels shadowed
+        /// that no cull shadows); on, more cap triangles are drawn.
+        cull_whole_planes: bool = true;
         /// Additive lit pass where stencil = 0 (paper) or Bestimt and Freitag's fill quad.
         shading: VolumeShading = VolumeShading::Additive;
         /// Rebuild a light's volumes only when the light or a caster moved. On the paper's

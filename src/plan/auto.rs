@@ -415,13 +415,19 @@ impl Judged {
 /// Picks a candidate for `light`: one whose cost is not yet measured first; else among those
 /// that meet `options.accuracy` (percent) the cheapest, keeping the current one unless another
 /// is cheaper by more than `estimate.hysteresis`; if none meets it, the most accurate.
+/// A choice the caller dictates ([`AutoMemory::follow`]) stands in place of the judgement.
 pub fn choose(light: usize, options: &Options, memory: &AutoMemory, alpha_casters: bool) -> Choice {
-    if let Some(&candidate) = memory.followed.get(&light) {
-        return Choice {
+    match memory.followed.get(&light) {
+        Some(&candidate) => Choice {
             candidate,
             reason: "as told: the choice `auto` made at this frame of a sampled run".into(),
-        };
+        },
+        None => judge(light, options, memory, alpha_casters),
     }
+}
+
+/// [`choose`] by the light's measured (or estimated) errors and costs.
+fn judge(light: usize, options: &Options, memory: &AutoMemory, alpha_casters: bool) -> Choice {
     let target = options.accuracy as f64 / 100.0;
     let current = memory.last(light);
     let judged: Vec<Judged> = options

@@ -50,6 +50,7 @@ fn part_key(
         o.extrusion as u8,
         o.finite_distance.to_bits(),
         o.facing_epsilon.to_bits(),
+        o.cull_whole_planes,
         p.group,
         p.id,
         p.subset_key,
@@ -346,6 +347,7 @@ fn build_part(
         radius: p.local_radius,
         // An explicit finite extrusion (the paper's option) is the user's to see.
         truncate: truncate && o.extrusion == volume::Extrusion::Infinite,
+        whole_planes: o.cull_whole_planes,
     });
     let piece = p.triangles(group);
     let mesh = volume::build_volume_of(

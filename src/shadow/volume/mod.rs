@@ -201,17 +201,21 @@ mod tests {
             min: p(0., 0., -50.),
             max: p(100., 100., -10.),
         }];
-        let cull = ReceiverCull {
+        let cull = |whole_planes| ReceiverCull {
             boxes: &boxes,
             radius: 1000.0,
             truncate: false,
+            whole_planes,
         };
         let light = DVec3::new(50.0, 50.0, 100.0);
         let s = settings(EdgeRule::Paper);
-        let v = build_volume_of(&g, &g.components[0], light, &s, false, Some(cull));
+        let v = build_volume_of(&g, &g.components[0], light, &s, false, Some(cull(true)));
         assert_eq!((v.culled, v.facing), (2, 4), "the wall alone left out");
         // The floor's outline: two edges along y = 0, two along y = 100, x = 0 and x = 200.
         assert_eq!(v.quads, 6);
+        // `shadow_volume.cull_whole_planes = false`: the kept half closed along x = 100.
+        let split = build_volume_of(&g, &g.components[0], light, &s, false, Some(cull(false)));
+        assert_eq!((split.culled, split.facing, split.quads), (4, 2, 4));
     }
 
     #[test]
@@ -445,6 +449,7 @@ mod tests {
                 boxes: std::slice::from_ref(&floor),
                 radius: 100.0,
                 truncate,
+                whole_planes: true,
             })
         };
         let s = settings(EdgeRule::Paper);

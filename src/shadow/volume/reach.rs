@@ -36,6 +36,9 @@ pub struct ReceiverCull<'a> {
     pub radius: f32,
     /// End the volume just past the receivers instead of at infinity (see [`truncation`]).
     pub truncate: bool,
+    /// Keep a culled triangle joined to a kept one through coplanar neighbours
+    /// (`shadow_volume.cull_whole_planes`).
+    pub whole_planes: bool,
 }
 
 /// How far behind a triangle's plane a receiver must reach to be in its shadow: the exact
@@ -169,7 +172,10 @@ pub(super) fn cull_to_receivers(
     if !rc.truncate {
         scale = f64::INFINITY;
     }
-    let restored = keep_coplanar_neighbours(c, comp, &culled, facing);
+    let restored = match rc.whole_planes {
+        true => keep_coplanar_neighbours(c, comp, &culled, facing),
+        false => 0,
+    };
     (culled.len() - restored, scale)
 }
 
