@@ -384,6 +384,7 @@ mod tests {
             effective: 512.0,
             exact: false,
             error: Interval::wilson(0.0, 512.0, false),
+            alpha_holes: Interval::default(),
         };
         planner.record_errors(&[sample], &options);
         let volumes = Candidate::of(Technique::ShadowVolume, &options);

@@ -208,6 +208,27 @@ impl Reference {
             .any(|o| self.blocks(o, from, dir, t_max))
     }
 
+    /// [`Reference::occluded`], and whether the segment, unblocked, passes an alpha-tested
+    /// triangle where its texel fails the test: a point lit through such a hole, which a
+    /// technique drawing those casters solid (shadow volumes) shadows.
+    pub fn occluded_or_through_hole(&self, from: DVec3, to: DVec3) -> (bool, bool) {
+        let Some((dir, t_max)) = Self::segment(from, to) else {
+            return (false, false);
+        };
+        let ray = Ray::new(
+            Point3::new(from.x, from.y, from.z),
+            Vector3::new(dir.x, dir.y, dir.z),
+        );
+        let mut hole = false;
+        for o in self.bvh.traverse_iterator(&ray, &self.occluders) {
+            if self.blocks(o, from, dir, t_max) {
+                return (true, false);
+            }
+            hole |= o.alpha.is_some() && intersect(from, dir, t_max, &o.v).is_some();
+        }
+        (false, hole)
+    }
+
     /// The same answer by testing every triangle, without the BVH (for checking it).
     pub fn occluded_brute_force(&self, from: DVec3, to: DVec3) -> bool {
         let Some((dir, t_max)) = Self::segment(from, to) else {

@@ -82,6 +82,10 @@ pub struct LightSample {
     /// Whether every receiver pixel was traced.
     pub exact: bool,
     pub error: Interval,
+    /// The share of receivers the reference lights through a hole of an alpha-tested caster
+    /// (a texel its alpha test rejects): what drawing those casters solid, as shadow volumes
+    /// do, shadows wrongly, whatever technique the frame ran.
+    pub alpha_holes: Interval,
 }
 
 /// A frame's sampled error: per light, and over every light's receiver pixels.
@@ -126,19 +130,20 @@ pub fn stream(seed: u64, frame: u64, light: usize) -> fastrand::Rng {
     fastrand::Rng::with_seed(mix)
 }
 
-/// What the exact reference says at pixel `i`: `None` where the light does not reach it.
+/// What the exact reference says at pixel `i` (shadowed, and lit through an alpha-tested
+/// caster's hole): `None` where the light does not reach it.
 fn exact_at(
     reference: &Reference,
     surfaces: &impl Surfaces,
     light: &Light,
     i: usize,
-) -> Option<bool> {
+) -> Option<(bool, bool)> {
     let (p, n) = surfaces.receiver_at(i)?;
     let (p, n) = (Vec3::from_array(p), Vec3::from_array(n));
     if !light.reaches(p.as_dvec3(), n.as_dvec3()) {
         return None;
     }
-    Some(reference.occluded(shadow_ray_origin(p, n), light.position.as_dvec3()))
+    Some(reference.occluded_or_through_hole(shadow_ray_origin(p, n), light.position.as_dvec3()))
 }
 
 /// The pixels of light `light`'s mask a sample traces: `n` stratified picks over its receiver
@@ -198,21 +203,27 @@ pub fn sample_light(
 ) -> LightSample {
     let (picks, pixels) = (&picks.picks, picks.receivers);
     let exact = picks.len() == pixels;
-    // (weight, wrong) per pick the reference also counts as a receiver.
-    let judged: Vec<(f64, bool)> = picks
+    // (weight, wrong, lit through a hole) per pick the reference also counts as a receiver.
+    let judged: Vec<(f64, bool, bool)> = picks
         .par_iter()
         .filter_map(|&(i, w)| {
-            let shadowed = exact_at(reference, surfaces, light, i as usize)?;
+            let (shadowed, hole) = exact_at(reference, surfaces, light, i as usize)?;
             let rendered_shadowed = mask.values[i as usize] == MaskValue::Shadowed as u8;
-            Some((w, shadowed != rendered_shadowed))
+            Some((w, shadowed != rendered_shadowed, hole))
         })
         .collect();
-    let (sum_w, sum_w2, wrong_w) = judged
-        .iter()
-        .fold((0.0, 0.0, 0.0), |(s, s2, e), &(w, wrong)| {
-            (s + w, s2 + w * w, e + if wrong { w } else { 0.0 })
-        });
+    let (sum_w, sum_w2, wrong_w, hole_w) =
+        judged
+            .iter()
+            .fold((0.0, 0.0, 0.0, 0.0), |(s, s2, e, h), &(w, wrong, hole)| {
+                let (e, h) = (
+                    e + if wrong { w } else { 0.0 },
+                    h + if hole { w } else { 0.0 },
+                );
+                (s + w, s2 + w * w, e, h)
+            });
     let share = if sum_w > 0.0 { wrong_w / sum_w } else { 0.0 };
+    let holes = if sum_w > 0.0 { hole_w / sum_w } else { 0.0 };
     let effective = if sum_w2 > 0.0 {
         sum_w * sum_w / sum_w2
     } else {
@@ -232,6 +243,7 @@ pub fn sample_light(
         effective,
         exact,
         error: Interval::wilson(share, effective, exact),
+        alpha_holes: Interval::wilson(holes, effective, exact),
     }
 }
 
@@ -275,15 +287,16 @@ pub fn sample_picked(
 /// Several lights' (or frames') estimates as one share of all their receivers: each weighted by
 /// its receivers, the interval on the summed effective sizes.
 pub fn pooled(parts: &[LightSample]) -> Interval {
+    pooled_by(parts, |p| p.error.value)
+}
+
+/// [`pooled`] of another share each part estimates (`value`), e.g. its `alpha_holes`.
+pub fn pooled_by(parts: &[LightSample], value: impl Fn(&LightSample) -> f64) -> Interval {
     let receivers: f64 = parts.iter().map(|p| p.receivers).sum();
     if receivers <= 0.0 {
         return Interval::wilson(0.0, 0.0, parts.iter().all(|p| p.exact));
     }
-    let share = parts
-        .iter()
-        .map(|p| p.receivers * p.error.value)
-        .sum::<f64>()
-        / receivers;
+    let share = parts.iter().map(|p| p.receivers * value(p)).sum::<f64>() / receivers;
     // The effective size of a stratified share with strata weights f_l = receivers_l / R and
     // equal spreads: 1 / sum(f_l^2 / n_l). Exact lights (every pixel traced) add no spread.
     let spread: f64 = parts
@@ -336,6 +349,15 @@ impl Running {
         let parts: Vec<LightSample> = self.frames.iter().copied().collect();
         Some(pooled(&parts))
     }
+
+    /// The share lit through alpha-tested casters' holes over the window's frames.
+    pub fn alpha_holes(&self) -> Option<Interval> {
+        if self.frames.is_empty() {
+            return None;
+        }
+        let parts: Vec<LightSample> = self.frames.iter().copied().collect();
+        Some(pooled_by(&parts, |p| p.alpha_holes.value))
+    }
 }
 
 #[cfg(test)]
@@ -380,6 +402,7 @@ mod tests {
             effective: 100.0,
             exact,
             error: Interval::wilson(value, 100.0, exact),
+            alpha_holes: Interval::default(),
         };
         let p = pooled(&[part(300.0, 0.1, false), part(100.0, 0.5, false)]);
         assert!((p.value - 0.2).abs() < 1e-12);

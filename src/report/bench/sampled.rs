@@ -183,6 +183,7 @@ mod tests {
             effective: 100.0,
             exact: false,
             error: Interval::wilson(value, 100.0, false),
+            alpha_holes: Interval::default(),
         };
         let frame = |i, lights: Vec<LightSample>| {
             let sample = FrameSample {
